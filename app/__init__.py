@@ -1,0 +1,1 @@
+"""The dashboard server (FastAPI); imports from ``planner``, never the other way round."""

@@ -1,0 +1,69 @@
+"""Abstract planning: optimistic stream instances, top-k plans, and their stream plans."""
+
+from planner.abstract.errors import (
+    AbstractPlanningError,
+    InstantiationLimitError,
+    TopKPlannerError,
+    UnreachableGoalError,
+)
+from planner.abstract.instantiate import (
+    OPTIMISTIC_PREFIX,
+    OptimisticInstantiation,
+    StreamInstance,
+    instantiate,
+)
+from planner.abstract.planner import (
+    MAX_K,
+    AbstractConfig,
+    AbstractResult,
+    compile_task,
+    plan_abstract,
+)
+from planner.abstract.skeleton import (
+    AbstractPlan,
+    GroundAction,
+    PlanReplayError,
+    action_multiset,
+    canonical_key,
+    recover_stream_plan,
+    replay,
+)
+from planner.abstract.topk import (
+    DEFAULT_TOPK,
+    TOPK_PLANNERS,
+    KStarPlanner,
+    SymKPlanner,
+    TopKPlanner,
+    TopKResult,
+    get_topk_planner,
+)
+
+__all__ = [
+    "DEFAULT_TOPK",
+    "MAX_K",
+    "OPTIMISTIC_PREFIX",
+    "TOPK_PLANNERS",
+    "AbstractConfig",
+    "AbstractPlan",
+    "AbstractPlanningError",
+    "AbstractResult",
+    "GroundAction",
+    "InstantiationLimitError",
+    "KStarPlanner",
+    "OptimisticInstantiation",
+    "PlanReplayError",
+    "StreamInstance",
+    "SymKPlanner",
+    "TopKPlanner",
+    "TopKPlannerError",
+    "TopKResult",
+    "UnreachableGoalError",
+    "action_multiset",
+    "canonical_key",
+    "compile_task",
+    "get_topk_planner",
+    "instantiate",
+    "plan_abstract",
+    "recover_stream_plan",
+    "replay",
+]

@@ -1,0 +1,173 @@
+"""Abstract planning: k unique skeletons (action plan + stream plan) from a top-k planner.
+
+The road eTAMP takes, which scales: plan over the domain's actions only, with every optimistic
+stream fact in the initial state, then recover each plan's stream plan. Plans that differ only in
+which optimistic object is which are one skeleton; while fewer than k skeletons are unique the
+request grows by ``growth`` (eTAMP: 1.5x) until the planner has no more.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections import defaultdict
+from dataclasses import dataclass, field
+
+from planner.abstract.instantiate import OptimisticInstantiation, instantiate
+from planner.abstract.skeleton import (
+    AbstractPlan,
+    GroundAction,
+    action_multiset,
+    canonical_key,
+    recover_stream_plan,
+)
+from planner.abstract.topk import DEFAULT_TOPK, TOPK_PLANNERS, get_topk_planner
+from planner.pddl.structs import Atom, Domain, Problem, StreamSet
+from planner.pddl.writer import write_domain, write_problem
+
+log = logging.getLogger(__name__)
+
+MAX_K = 10_000  # more skeletons than any search can use; larger asks are a mistake
+
+
+@dataclass(frozen=True)
+class AbstractConfig:
+    """How many skeletons to find and how."""
+
+    k: int = 50  # unique skeletons wanted (the paper uses k = 50 on the kitchen)
+    backend: str = DEFAULT_TOPK  # top-k planner by name: "kstar" or "symk"
+    max_levels: int = 4  # generations of optimistic stream instances
+    max_instances: int = 50_000  # bound on optimistic stream instances
+    growth: float = 1.5  # request growth per round while duplicates leave < k (eTAMP's 1.5)
+    oversample: float = 4.0  # first request = oversample * k plans: duplicates are common, and
+    # diversity chooses among more; one large call is cheaper than growing rounds
+    diversity_ignore: tuple[str, ...] = ()  # actions left out when comparing plans for diversity
+    timeout_s: float = 300.0  # wall-clock limit of one top-k call
+    max_requested: int = 4 * MAX_K  # never ask the top-k planner for more plans than this
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.k <= MAX_K:
+            raise ValueError(f"k must be between 1 and {MAX_K}, got {self.k}")
+        if self.backend not in TOPK_PLANNERS:
+            known = ", ".join(sorted(TOPK_PLANNERS))
+            raise ValueError(f"unknown top-k planner {self.backend!r} (known: {known})")
+        if self.max_levels < 1 or self.max_instances < 1:
+            raise ValueError("max_levels and max_instances must be positive")
+        if self.growth <= 1.0:
+            raise ValueError(f"growth must exceed 1, got {self.growth}")
+        if self.oversample < 1.0:
+            raise ValueError(f"oversample must be at least 1, got {self.oversample}")
+        if self.timeout_s <= 0:
+            raise ValueError(f"timeout_s must be positive, got {self.timeout_s}")
+
+
+@dataclass(frozen=True)
+class AbstractResult:
+    """The chosen skeletons and what it took to find them."""
+
+    plans: tuple[AbstractPlan, ...]
+    backend: str
+    rounds: int  # top-k calls made
+    requested: int  # plans asked for in the last call
+    returned: int  # plans the last call returned
+    unique: int  # unique skeletons among them
+    exhausted: bool  # the planner had no more plans
+    instances: int  # optimistic stream instances
+    seconds: dict[str, float] = field(default_factory=dict)  # instantiate, topk, recover, total
+    diversity_ignore: tuple[str, ...] = ()  # as in the config
+
+    @property
+    def distinct_multisets(self) -> int:
+        """Distinct multisets of actions among the chosen plans (reorderings count once)."""
+        return len({action_multiset(p.actions) for p in self.plans})
+
+    @property
+    def distinct_choices(self) -> int:
+        """Distinct multisets once ``diversity_ignore`` actions (e.g. moves) are left out."""
+        return len({action_multiset(p.actions, self.diversity_ignore) for p in self.plans})
+
+
+def compile_task(
+    domain: Domain, problem: Problem, inst: OptimisticInstantiation
+) -> tuple[str, str]:
+    """The classical task: the domain's actions, optimistic facts added to the initial state."""
+    return write_domain(domain), write_problem(
+        problem, domain, extra_objects=inst.objects, extra_init=inst.facts
+    )
+
+
+def _select_diverse(
+    plans: list[AbstractPlan], k: int, ignore: tuple[str, ...]
+) -> list[AbstractPlan]:
+    """Up to k plans, round-robin over groups with the same action multiset (cheapest first)."""
+    if len(plans) <= k:
+        return plans
+    groups: dict[frozenset[tuple[GroundAction, int]], list[int]] = defaultdict(list)
+    for i, plan in enumerate(plans):
+        groups[action_multiset(plan.actions, ignore)].append(i)
+    chosen: list[int] = []
+    depth = 0
+    while len(chosen) < k:
+        for members in groups.values():
+            if depth < len(members) and len(chosen) < k:
+                chosen.append(members[depth])
+        depth += 1
+    return [plans[i] for i in sorted(chosen)]
+
+
+def plan_abstract(
+    domain: Domain, streams: StreamSet, problem: Problem, config: AbstractConfig
+) -> AbstractResult:
+    """Find ``config.k`` unique skeletons (fewer if the planner runs out)."""
+    t0 = time.perf_counter()
+    inst = instantiate(
+        streams, problem, max_levels=config.max_levels, max_instances=config.max_instances
+    )
+    t_inst = time.perf_counter() - t0
+    domain_pddl, problem_pddl = compile_task(domain, problem, inst)
+    backend = get_topk_planner(config.backend)
+    request = min(math.ceil(config.k * config.oversample), config.max_requested)
+    rounds, t_topk, t_recover = 0, 0.0, 0.0
+    while True:
+        rounds += 1
+        result = backend.plan(domain_pddl, problem_pddl, request, timeout_s=config.timeout_s)
+        t_topk += result.seconds
+        t1 = time.perf_counter()
+        unique: dict[object, AbstractPlan] = {}
+        cache: dict[GroundAction, tuple[Atom, ...]] = {}
+        for actions, cost in zip(result.plans, result.costs, strict=True):
+            stream_plan = recover_stream_plan(actions, domain, problem, inst, cache=cache)
+            key = canonical_key(actions, stream_plan)
+            if key not in unique:
+                unique[key] = AbstractPlan(actions, stream_plan, cost)
+        t_recover += time.perf_counter() - t1
+        log.info(
+            "round %d: asked %d, got %d plans, %d unique skeletons",
+            rounds,
+            request,
+            len(result.plans),
+            len(unique),
+        )
+        if len(unique) >= config.k or result.exhausted or request >= config.max_requested:
+            break
+        request = min(math.ceil(request * config.growth), config.max_requested)
+    chosen = _select_diverse(list(unique.values()), config.k, config.diversity_ignore)
+    total = time.perf_counter() - t0
+    return AbstractResult(
+        plans=tuple(chosen),
+        backend=config.backend,
+        rounds=rounds,
+        requested=request,
+        returned=len(result.plans),
+        unique=len(unique),
+        exhausted=result.exhausted,
+        instances=len(inst.instances),
+        seconds={
+            "instantiate": t_inst,
+            "topk": t_topk,
+            "recover": t_recover,
+            "total": total,
+        },
+        diversity_ignore=config.diversity_ignore,
+    )

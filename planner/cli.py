@@ -1,0 +1,244 @@
+"""The ``tamp`` command."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from collections import Counter
+from collections.abc import Sequence
+from typing import Any
+
+from planner.abstract import (
+    MAX_K,
+    TOPK_PLANNERS,
+    AbstractConfig,
+    AbstractPlan,
+    AbstractPlanningError,
+    AbstractResult,
+    PlanReplayError,
+    plan_abstract,
+    replay,
+)
+from planner.abstract.topk import DEFAULT_TOPK
+from planner.domains import get_domain, known_domains, problem_for_scene
+from planner.pddl import PDDLError, Problem
+from planner.scene import SceneError, known_scenes
+from planner.streams import StreamBindingError
+
+log = logging.getLogger("tamp")
+
+# Errors a user can cause; they are reported in one line, without a traceback.
+USER_ERRORS = (
+    PDDLError,
+    SceneError,
+    AbstractPlanningError,
+    StreamBindingError,
+    ValueError,
+    FileNotFoundError,
+)
+
+
+def _k(text: str) -> int:
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= k <= MAX_K:
+        raise argparse.ArgumentTypeError(f"k must be between 1 and {MAX_K}, got {k}")
+    return k
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tamp", description="guided-tamp: task and motion planning that learns where to search"
+    )
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    ab = sub.add_parser(
+        "abstract",
+        help="k abstract plans and their stream plans",
+        description="Find k unique skeletons (action plan + stream plan) with a top-k planner.",
+    )
+    src = ab.add_mutually_exclusive_group(required=True)
+    src.add_argument("--scene", help="scene name (see `tamp scenes`) or path to a scene .json")
+    src.add_argument("--problem", help="path to a PDDL problem file (needs --domain)")
+    ab.add_argument("--domain", help=f"domain for --problem ({', '.join(known_domains())})")
+    ab.add_argument("--k", type=_k, default=50, help="unique skeletons wanted (default 50)")
+    ab.add_argument(
+        "--planner",
+        choices=sorted(TOPK_PLANNERS),
+        default=DEFAULT_TOPK,
+        help=f"top-k planner (default {DEFAULT_TOPK})",
+    )
+    ab.add_argument(
+        "--timeout", type=_positive, default=300.0, help="seconds per top-k call (default 300)"
+    )
+    ab.add_argument("--show", type=int, default=0, metavar="N", help="print N plans in full")
+    ab.add_argument("--json", action="store_true", help="machine-readable output")
+
+    sub.add_parser("scenes", help="list the known scenes")
+    sub.add_parser("serve", help="start the dashboard")
+    return parser
+
+
+def _plan_json(rank: int, plan: AbstractPlan, problem: Problem, domain: Any) -> dict[str, Any]:
+    try:
+        replay(plan, domain, problem)
+        valid, error = True, None
+    except PlanReplayError as exc:
+        valid, error = False, str(exc)
+    return {
+        "rank": rank,
+        "cost": plan.cost,
+        "length": len(plan.actions),
+        "actions": [str(a) for a in plan.actions],
+        "stream_plan": [
+            {
+                "stream": s.stream,
+                "inputs": list(s.inputs),
+                "outputs": list(s.outputs),
+                "level": s.level,
+                "certified": [str(a) for a in s.certified],
+            }
+            for s in plan.stream_plan
+        ],
+        "valid": valid,
+        "error": error,
+    }
+
+
+def _summary(result: AbstractResult) -> dict[str, Any]:
+    return {
+        "backend": result.backend,
+        "seconds": {k: round(v, 4) for k, v in result.seconds.items()},
+        "rounds": result.rounds,
+        "requested": result.requested,
+        "returned": result.returned,
+        "unique": result.unique,
+        "exhausted": result.exhausted,
+        "stream_instances": result.instances,
+        "distinct_multisets": result.distinct_multisets,
+        "distinct_choices": result.distinct_choices,
+        "diversity_ignore": list(result.diversity_ignore),
+    }
+
+
+def cmd_abstract(args: argparse.Namespace) -> int:
+    if args.scene:
+        if args.domain:
+            raise ValueError("--domain goes with --problem; a scene names its own domain")
+        loaded, problem = problem_for_scene(args.scene)
+        name = args.scene
+    else:
+        if not args.domain:
+            raise ValueError(f"--problem needs --domain ({', '.join(known_domains())})")
+        loaded = get_domain(args.domain)
+        problem = loaded.problem_from_file(args.problem)
+        name = args.problem
+    config = AbstractConfig(
+        k=args.k,
+        backend=args.planner,
+        timeout_s=args.timeout,
+        diversity_ignore=loaded.spec.diversity_ignore,
+    )
+    result = plan_abstract(loaded.domain, loaded.streams, problem, config)
+    plans = [_plan_json(i + 1, p, problem, loaded.domain) for i, p in enumerate(result.plans)]
+    if args.json:
+        out = {"problem": name, "domain": loaded.domain.name, "k": args.k, **_summary(result)}
+        out["plans"] = plans
+        print(json.dumps(out, indent=2))
+    else:
+        _print_text(name, args.k, result, plans, args.show)
+    return 0 if all(p["valid"] for p in plans) else 1
+
+
+def _print_text(
+    name: str, k: int, result: AbstractResult, plans: list[dict[str, Any]], show: int
+) -> None:
+    s = result.seconds
+    print(
+        f"{name}: {len(result.plans)} of {k} skeletons from {result.backend} in {s['total']:.2f} s "
+        f"(instantiate {s['instantiate']:.2f} s, top-k {s['topk']:.2f} s, "
+        f"stream plans {s['recover']:.2f} s)"
+    )
+    print(
+        f"  {result.instances} optimistic stream instances; {result.rounds} top-k call(s), "
+        f"last asked {result.requested}, returned {result.returned}, {result.unique} unique"
+        + ("; the planner has no more plans" if result.exhausted else "")
+    )
+    ignored = ", ".join(result.diversity_ignore)
+    print(
+        f"  {result.distinct_multisets} distinct action multisets"
+        + (f", {result.distinct_choices} ignoring {ignored}" if ignored else "")
+    )
+    print(f"  {'#':>3} {'len':>4} {'cost':>5} {'streams':>7}  valid  stream plan")
+    for p in plans:
+        counts = Counter(st["stream"] for st in p["stream_plan"])
+        mix = ", ".join(f"{n} x{c}" for n, c in counts.items())
+        print(
+            f"  {p['rank']:>3} {p['length']:>4} {p['cost']:>5g} {len(p['stream_plan']):>7}  "
+            f"{'yes' if p['valid'] else 'NO':>5}  {mix}"
+        )
+    for p in plans[:show]:
+        print(f"\nplan {p['rank']} (cost {p['cost']:g}):")
+        for st in p["stream_plan"]:
+            outs = " -> " + " ".join(st["outputs"]) if st["outputs"] else ""
+            print(f"  stream {st['stream']}({' '.join(st['inputs'])}){outs}")
+        for a in p["actions"]:
+            print(f"  {a}")
+        if not p["valid"]:
+            print(f"  INVALID: {p['error']}")
+
+
+def cmd_scenes(_: argparse.Namespace) -> int:
+    for name in known_scenes():
+        print(name)
+    return 0
+
+
+def cmd_serve(_: argparse.Namespace) -> int:
+    # TODO(#6): the FastAPI dashboard.
+    print("dashboard not built yet (it arrives with the dashboard issue); try `tamp abstract`")
+    return 0
+
+
+COMMANDS = {"abstract": cmd_abstract, "scenes": cmd_scenes, "serve": cmd_serve}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING,
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        return COMMANDS[args.command](args)
+    except USER_ERRORS as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except NotImplementedError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # output piped into `head` and the like
+        return 0
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

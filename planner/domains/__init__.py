@@ -1,0 +1,89 @@
+"""Domains: one folder each with ``domain.pddl``, ``stream.pddl`` and Python bindings.
+
+A domain is registered by name in :data:`DOMAINS`; asking for an unknown name lists the known.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from planner.pddl.parser import load_domain, load_problem, load_streams
+from planner.pddl.structs import Domain, Problem, StreamSet
+from planner.scene import Scene, SceneError, load_scene
+from planner.streams.adapters import StreamAdapter
+from planner.streams.runtime import StreamRuntime, bind_streams
+
+DOMAINS_DIR = Path(__file__).resolve().parent
+
+ProblemBuilder = Callable[[Scene, Domain], Problem]
+BindingFactory = Callable[[Problem, random.Random], Mapping[str, StreamAdapter]]
+
+
+@dataclass(frozen=True)
+class DomainSpec:
+    """How to load a domain and build its problems and samplers."""
+
+    name: str
+    problem_from_scene: ProblemBuilder
+    bindings: BindingFactory | None  # None: samplers not written yet
+    diversity_ignore: tuple[str, ...] = ()  # actions that only reorder (see AbstractConfig)
+
+    @property
+    def directory(self) -> Path:
+        return DOMAINS_DIR / self.name
+
+
+@dataclass(frozen=True)
+class LoadedDomain:
+    spec: DomainSpec
+    domain: Domain
+    streams: StreamSet
+
+    def problem_from_scene(self, scene: Scene) -> Problem:
+        if scene.domain != self.spec.name:
+            raise SceneError(
+                f"{scene.source}: domain: scene is for {scene.domain!r}, not {self.spec.name!r}"
+            )
+        return self.spec.problem_from_scene(scene, self.domain)
+
+    def problem_from_file(self, path: str | Path) -> Problem:
+        return load_problem(path, self.domain)
+
+    def runtime(self, problem: Problem, *, seed: int) -> StreamRuntime:
+        """Samplers bound to the declared streams, seeded."""
+        if self.spec.bindings is None:
+            raise NotImplementedError(
+                f"domain {self.spec.name!r} has no stream samplers yet"
+            )  # TODO(#3): the kitchen's pybullet samplers
+        return bind_streams(self.streams, self.spec.bindings(problem, random.Random(seed)))
+
+
+def _registry() -> dict[str, DomainSpec]:
+    from planner.domains import kitchen, line
+
+    return {spec.name: spec for spec in (kitchen.SPEC, line.SPEC)}
+
+
+def known_domains() -> tuple[str, ...]:
+    return tuple(sorted(_registry()))
+
+
+def get_domain(name: str) -> LoadedDomain:
+    """Parse the domain called ``name`` and its streams."""
+    specs = _registry()
+    if name not in specs:
+        raise ValueError(f"unknown domain {name!r} (known: {', '.join(sorted(specs))})")
+    spec = specs[name]
+    domain = load_domain(spec.directory / "domain.pddl")
+    streams = load_streams(spec.directory / "stream.pddl", domain)
+    return LoadedDomain(spec, domain, streams)
+
+
+def problem_for_scene(scene_name: str) -> tuple[LoadedDomain, Problem]:
+    """Load a scene by name or path, its domain, and the problem it describes."""
+    scene = load_scene(scene_name)
+    loaded = get_domain(scene.domain)
+    return loaded, loaded.problem_from_scene(scene)

@@ -1,0 +1,22 @@
+"""The stream runtime: Python samplers bound to declared streams, timed queries."""
+
+from planner.streams.adapters import StreamAdapter, from_fn, from_gen_fn, from_test
+from planner.streams.runtime import (
+    BoundStream,
+    QueryResult,
+    StreamBindingError,
+    StreamRuntime,
+    bind_streams,
+)
+
+__all__ = [
+    "BoundStream",
+    "QueryResult",
+    "StreamAdapter",
+    "StreamBindingError",
+    "StreamRuntime",
+    "bind_streams",
+    "from_fn",
+    "from_gen_fn",
+    "from_test",
+]

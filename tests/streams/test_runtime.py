@@ -1,0 +1,85 @@
+"""Bindings must match declarations; queries are timed and a raising sampler is a failure."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import pytest
+
+from planner.domains import LoadedDomain
+from planner.pddl import Problem
+from planner.streams import StreamBindingError, bind_streams, from_fn, from_gen_fn, from_test
+
+
+def test_missing_binding_names_stream_and_file(line: LoadedDomain) -> None:
+    with pytest.raises(StreamBindingError) as info:
+        bind_streams(line.streams, {"sample-pose": from_fn(lambda b, r: (0.0,))})
+    assert info.value.stream == "test-reachable"
+    assert "stream.pddl" in str(info.value) and "'test-reachable'" in str(info.value)
+
+
+def test_binding_for_undeclared_stream_is_refused(line: LoadedDomain) -> None:
+    bindings = {
+        "sample-pose": from_fn(lambda b, r: (0.0,)),
+        "test-reachable": from_test(lambda b, p: True),
+        "sample-grasp": from_fn(lambda b: (1,)),
+    }
+    with pytest.raises(StreamBindingError, match=r"'sample-grasp'.*declares no such stream"):
+        bind_streams(line.streams, bindings)
+
+
+def test_test_adapter_on_stream_with_outputs_is_refused(line: LoadedDomain) -> None:
+    bindings = {"sample-pose": from_test(lambda b, r: True), "test-reachable": from_test(bool)}
+    with pytest.raises(StreamBindingError, match="has outputs"):
+        bind_streams(line.streams, bindings)
+
+
+def test_generator_is_one_per_input_binding_and_exhausts(line: LoadedDomain) -> None:
+    def gen(width: float, region: tuple[float, float]) -> Iterator[tuple[float]]:
+        yield (region[0],)
+        yield (region[1],)
+
+    rt = bind_streams(
+        line.streams, {"sample-pose": from_gen_fn(gen), "test-reachable": from_test(bool)}
+    )
+    first = [rt.query("sample-pose", (1.0, (0.0, 5.0))).outputs for _ in range(3)]
+    assert first == [(0.0,), (5.0,), None]
+    other = rt.query("sample-pose", (1.0, (2.0, 3.0)))
+    assert other.outputs == (2.0,)
+
+
+def test_raising_sampler_is_a_recorded_failure(line: LoadedDomain) -> None:
+    def broken(width: float, region: tuple[float, float]) -> tuple[float]:
+        raise RuntimeError("IK diverged")
+
+    rt = bind_streams(
+        line.streams, {"sample-pose": from_fn(broken), "test-reachable": from_test(bool)}
+    )
+    result = rt.query("sample-pose", (1.0, (0.0, 5.0)))
+    assert not result.success
+    assert result.error == "RuntimeError: IK diverged"
+    assert result.wall_s >= 0 and result.cpu_s >= 0
+
+
+def test_wrong_number_of_outputs_is_a_failure_not_a_crash(line: LoadedDomain) -> None:
+    rt = bind_streams(
+        line.streams,
+        {"sample-pose": from_fn(lambda w, r: (1.0, 2.0)), "test-reachable": from_test(bool)},
+    )
+    result = rt.query("sample-pose", (1.0, (0.0, 5.0)))
+    assert result.outputs is None and result.error is not None and "2 outputs" in result.error
+
+
+def test_line_samplers_respect_the_scene(line: LoadedDomain, line_problem: Problem) -> None:
+    rt = line.runtime(line_problem, seed=3)
+    values = line_problem.values
+    for _ in range(50):
+        result = rt.query("sample-pose", (values["a"], values["goal"]))
+        assert result.outputs is not None
+        (x,) = result.outputs
+        assert 1.25 <= x <= 3.75  # inside goal [1, 4], half a 0.5 block from each end
+        assert rt.query("test-reachable", (values["a"], x)).success
+    assert not rt.query("test-reachable", (values["a"], 12.0)).success
+    same = line.runtime(line_problem, seed=3).query("sample-pose", (0.5, (1.0, 4.0)))
+    again = line.runtime(line_problem, seed=3).query("sample-pose", (0.5, (1.0, 4.0)))
+    assert same.outputs == again.outputs  # seeded
