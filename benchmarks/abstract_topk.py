@@ -57,7 +57,9 @@ def main() -> int:
                 print(f"  {scene} {b} run {rep + 1}: {seconds[b][-1]:.2f} s", file=sys.stderr)
         ratio = ""
         if len(backends) == 2:
-            ratios = [y / x for x, y in zip(seconds[backends[0]], seconds[backends[1]], strict=True)]
+            ratios = [
+                y / x for x, y in zip(seconds[backends[0]], seconds[backends[1]], strict=True)
+            ]
             ratio = f"{statistics.median(ratios):.1f}"
         for b in backends:
             r = last[b]

@@ -7,7 +7,7 @@ import json
 import logging
 import sys
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from planner.abstract import (
@@ -154,8 +154,12 @@ def cmd_abstract(args: argparse.Namespace) -> int:
         timeout_s=args.timeout,
         diversity_ignore=loaded.spec.diversity_ignore,
     )
-    result = plan_abstract(loaded.domain, loaded.streams, problem, config)
+    result = plan_abstract(
+        loaded.domain, loaded.streams, problem, config, progress=_progress_line()
+    )
     plans = [_plan_json(i + 1, p, problem, loaded.domain) for i, p in enumerate(result.plans)]
+    if sys.stderr.isatty():
+        sys.stderr.write("\r\033[K")
     if args.json:
         out = {"problem": name, "domain": loaded.domain.name, "k": args.k, **_summary(result)}
         out["plans"] = plans
@@ -163,6 +167,18 @@ def cmd_abstract(args: argparse.Namespace) -> int:
     else:
         _print_text(name, args.k, result, plans, args.show)
     return 0 if all(p["valid"] for p in plans) else 1
+
+
+def _progress_line() -> Callable[[str], None] | None:
+    """A status line on stderr that overwrites itself, only on an interactive terminal."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(message: str) -> None:
+        sys.stderr.write(f"\r\033[K{message}")
+        sys.stderr.flush()
+
+    return show
 
 
 def _print_text(

@@ -12,6 +12,7 @@ import logging
 import math
 import time
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from planner.abstract.instantiate import OptimisticInstantiation, instantiate
@@ -117,9 +118,18 @@ def _select_diverse(
 
 
 def plan_abstract(
-    domain: Domain, streams: StreamSet, problem: Problem, config: AbstractConfig
+    domain: Domain,
+    streams: StreamSet,
+    problem: Problem,
+    config: AbstractConfig,
+    *,
+    progress: Callable[[str], None] | None = None,
 ) -> AbstractResult:
-    """Find ``config.k`` unique skeletons (fewer if the planner runs out)."""
+    """Find ``config.k`` unique skeletons (fewer if the planner runs out).
+
+    ``progress`` receives one line before each top-k call and after it (for a terminal).
+    """
+    say = progress or (lambda _msg: None)
     t0 = time.perf_counter()
     inst = instantiate(
         streams, problem, max_levels=config.max_levels, max_instances=config.max_instances
@@ -131,6 +141,7 @@ def plan_abstract(
     rounds, t_topk, t_recover = 0, 0.0, 0.0
     while True:
         rounds += 1
+        say(f"{config.backend}: asking for {request} plans (call {rounds})")
         result = backend.plan(domain_pddl, problem_pddl, request, timeout_s=config.timeout_s)
         t_topk += result.seconds
         t1 = time.perf_counter()
@@ -142,13 +153,12 @@ def plan_abstract(
             if key not in unique:
                 unique[key] = AbstractPlan(actions, stream_plan, cost)
         t_recover += time.perf_counter() - t1
-        log.info(
-            "round %d: asked %d, got %d plans, %d unique skeletons",
-            rounds,
-            request,
-            len(result.plans),
-            len(unique),
+        message = (
+            f"{config.backend}: {len(result.plans)} plans in {result.seconds:.1f} s, "
+            f"{len(unique)} unique skeletons"
         )
+        log.info(message)
+        say(message)
         if len(unique) >= config.k or result.exhausted or request >= config.max_requested:
             break
         request = min(math.ceil(request * config.growth), config.max_requested)

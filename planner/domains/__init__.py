@@ -85,5 +85,9 @@ def get_domain(name: str) -> LoadedDomain:
 def problem_for_scene(scene_name: str) -> tuple[LoadedDomain, Problem]:
     """Load a scene by name or path, its domain, and the problem it describes."""
     scene = load_scene(scene_name)
+    if scene.domain not in known_domains():
+        raise scene.field_error(
+            "domain", f"unknown domain {scene.domain!r} (known: {', '.join(known_domains())})"
+        )
     loaded = get_domain(scene.domain)
     return loaded, loaded.problem_from_scene(scene)

@@ -80,6 +80,12 @@ class Predicate:
         return len(self.params)
 
 
+def _check_unique(names: list[str], message: str) -> None:
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise ValueError(f"{message} {dupes}")
+
+
 def _check_variables(owner: str, known: set[str], atoms: Iterable[Atom]) -> None:
     for atom in atoms:
         for term in atom.variables:
@@ -131,9 +137,7 @@ class Domain:
             ("action", [a.name for a in self.actions]),
             ("predicate", [p.name for p in self.predicates]),
         ):
-            dupes = {n for n in names if names.count(n) > 1}
-            if dupes:
-                raise ValueError(f"domain {self.name}: repeated {kind} {sorted(dupes)}")
+            _check_unique(names, f"domain {self.name}: repeated {kind}")
 
     @property
     def typed(self) -> bool:
@@ -217,9 +221,7 @@ class StreamSet:
 
     def __post_init__(self) -> None:
         names = [s.name for s in self.streams]
-        dupes = {n for n in names if names.count(n) > 1}
-        if dupes:
-            raise ValueError(f"{self.source}: repeated stream {sorted(dupes)}")
+        _check_unique(names, f"{self.source}: repeated stream")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -252,9 +254,7 @@ class Problem:
 
     def __post_init__(self) -> None:
         names = [o.name for o in self.objects]
-        dupes = {n for n in names if names.count(n) > 1}
-        if dupes:
-            raise ValueError(f"problem {self.name}: repeated object {sorted(dupes)}")
+        _check_unique(names, f"problem {self.name}: repeated object")
         for atom in self.init:
             if atom.variables:
                 raise ValueError(f"problem {self.name}: initial fact {atom} has a variable")

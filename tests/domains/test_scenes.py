@@ -75,3 +75,10 @@ def test_line_scene_checks_geometry(tmp_path: Path, line: LoadedDomain) -> None:
     data["blocks"][0]["x"] = 0.0  # between the regions
     with pytest.raises(SceneError, match=r"blocks\[0\].x: block does not lie inside start"):
         line.problem_from_scene(load_scene(write(tmp_path, data)))
+
+
+def test_scene_for_unknown_domain_names_the_field(tmp_path: Path) -> None:
+    data = base()
+    data["domain"] = "blocksworld"
+    with pytest.raises(SceneError, match=r"domain: unknown domain 'blocksworld' .known: kitchen"):
+        problem_for_scene(write(tmp_path, data))
