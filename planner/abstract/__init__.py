@@ -27,6 +27,7 @@ from planner.abstract.skeleton import (
     canonical_key,
     recover_stream_plan,
     replay,
+    symbolic_states,
 )
 from planner.abstract.topk import (
     DEFAULT_TOPK,
@@ -66,4 +67,5 @@ __all__ = [
     "plan_abstract",
     "recover_stream_plan",
     "replay",
+    "symbolic_states",
 ]

@@ -148,10 +148,12 @@ def plan_abstract(
         unique: dict[object, AbstractPlan] = {}
         cache: dict[GroundAction, tuple[Atom, ...]] = {}
         for actions, cost in zip(result.plans, result.costs, strict=True):
-            stream_plan = recover_stream_plan(actions, domain, problem, inst, cache=cache)
+            stream_plan, first_use = recover_stream_plan(
+                actions, domain, problem, inst, cache=cache
+            )
             key = canonical_key(actions, stream_plan)
             if key not in unique:
-                unique[key] = AbstractPlan(actions, stream_plan, cost)
+                unique[key] = AbstractPlan(actions, stream_plan, cost, first_use)
         t_recover += time.perf_counter() - t1
         message = (
             f"{config.backend}: {len(result.plans)} plans in {result.seconds:.1f} s, "

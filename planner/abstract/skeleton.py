@@ -36,6 +36,11 @@ class AbstractPlan:
     actions: tuple[GroundAction, ...]
     stream_plan: tuple[StreamInstance, ...]
     cost: float
+    first_use: tuple[int, ...] = ()  # per stream: index of the first action that needs it
+
+    def __post_init__(self) -> None:
+        if self.first_use and len(self.first_use) != len(self.stream_plan):
+            raise ValueError("first_use needs one action index per stream of the stream plan")
 
     @property
     def optimistic_objects(self) -> tuple[str, ...]:
@@ -64,7 +69,7 @@ def _ground(domain: Domain, action: GroundAction) -> tuple[list[Literal], list[A
     )
 
 
-def _holds(lit: Literal, state: set[Atom]) -> bool:
+def _holds(lit: Literal, state: set[Atom] | frozenset[Atom]) -> bool:
     if lit.is_equality:
         equal = lit.atom.args[0] == lit.atom.args[1]
         return equal == lit.positive
@@ -78,8 +83,9 @@ def recover_stream_plan(
     inst: OptimisticInstantiation,
     *,
     cache: dict[GroundAction, tuple[Atom, ...]] | None = None,
-) -> tuple[StreamInstance, ...]:
-    """The streams whose certified facts the plan needs, with the streams they depend on.
+) -> tuple[tuple[StreamInstance, ...], tuple[int, ...]]:
+    """The streams whose certified facts the plan needs, with the streams they depend on, and
+    for each the index of the first action that needs it (``len(actions)``: only the goal).
 
     Ordered as the plan needs them: by the first action that needs a stream (directly or
     through a stream that consumes its outputs), then by level, which keeps producers before
@@ -112,7 +118,21 @@ def recover_stream_plan(
         if lit.positive and lit.atom not in problem.init and lit.atom in inst.certifier:
             need(inst.certifier[lit.atom], len(actions))
     order = sorted(first_step, key=lambda i: (first_step[i], inst.instances[i].level, i))
-    return tuple(inst.instances[i] for i in order)
+    return tuple(inst.instances[i] for i in order), tuple(first_step[i] for i in order)
+
+
+def symbolic_states(
+    actions: Sequence[GroundAction], domain: Domain, init: frozenset[Atom]
+) -> list[frozenset[Atom]]:
+    """The fluent state before each action, and after the last (no precondition checks)."""
+    states = [init]
+    state = set(init)
+    for action in actions:
+        _, adds, dels = _ground(domain, action)
+        state.difference_update(dels)
+        state.update(adds)
+        states.append(frozenset(state))
+    return states
 
 
 def replay(plan: AbstractPlan, domain: Domain, problem: Problem) -> None:

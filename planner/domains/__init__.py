@@ -18,7 +18,7 @@ from planner.streams.runtime import StreamRuntime, bind_streams
 
 DOMAINS_DIR = Path(__file__).resolve().parent
 
-ProblemBuilder = Callable[[Scene, Domain], Problem]
+ProblemBuilder = Callable[[Scene, Domain, int], Problem]  # scene, domain, seed
 BindingFactory = Callable[[Problem, random.Random], Mapping[str, StreamAdapter]]
 
 
@@ -42,12 +42,13 @@ class LoadedDomain:
     domain: Domain
     streams: StreamSet
 
-    def problem_from_scene(self, scene: Scene) -> Problem:
+    def problem_from_scene(self, scene: Scene, *, seed: int = 0) -> Problem:
+        """The scene's problem; ``seed`` draws its randomised parts (initial block poses)."""
         if scene.domain != self.spec.name:
             raise SceneError(
                 f"{scene.source}: domain: scene is for {scene.domain!r}, not {self.spec.name!r}"
             )
-        return self.spec.problem_from_scene(scene, self.domain)
+        return self.spec.problem_from_scene(scene, self.domain, seed)
 
     def problem_from_file(self, path: str | Path) -> Problem:
         return load_problem(path, self.domain)
@@ -82,7 +83,7 @@ def get_domain(name: str) -> LoadedDomain:
     return LoadedDomain(spec, domain, streams)
 
 
-def problem_for_scene(scene_name: str) -> tuple[LoadedDomain, Problem]:
+def problem_for_scene(scene_name: str, *, seed: int = 0) -> tuple[LoadedDomain, Problem]:
     """Load a scene by name or path, its domain, and the problem it describes."""
     scene = load_scene(scene_name)
     if scene.domain not in known_domains():
@@ -90,4 +91,4 @@ def problem_for_scene(scene_name: str) -> tuple[LoadedDomain, Problem]:
             "domain", f"unknown domain {scene.domain!r} (known: {', '.join(known_domains())})"
         )
     loaded = get_domain(scene.domain)
-    return loaded, loaded.problem_from_scene(scene)
+    return loaded, loaded.problem_from_scene(scene, seed=seed)

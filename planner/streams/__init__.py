@@ -1,6 +1,6 @@
 """The stream runtime: Python samplers bound to declared streams, timed queries."""
 
-from planner.streams.adapters import StreamAdapter, from_fn, from_gen_fn, from_test
+from planner.streams.adapters import StreamAdapter, StreamContext, from_fn, from_gen_fn, from_test
 from planner.streams.runtime import (
     BoundStream,
     QueryResult,
@@ -14,6 +14,7 @@ __all__ = [
     "QueryResult",
     "StreamAdapter",
     "StreamBindingError",
+    "StreamContext",
     "StreamRuntime",
     "bind_streams",
     "from_fn",

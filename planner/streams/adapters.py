@@ -10,32 +10,60 @@ Three kinds, as in PDDLStream's ``from_fn``/``from_gen_fn``/``from_test``:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Iterator
+from collections.abc import Callable, Hashable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
+
+from planner.pddl.structs import Atom
 
 AdapterKind = Literal["fn", "gen", "test"]
 Outputs = tuple[Any, ...]
 
 
+@dataclass(frozen=True)
+class StreamContext:
+    """What holds when a stream's outputs are first needed: the symbolic state of the plan at
+    that step and the values bound so far. Samplers that take ``context`` see the world as it
+    will be (which blocks already sit on the stove, what the hand holds)."""
+
+    state: frozenset[Atom]
+    values: Mapping[str, Any]
+
+    def holds(self, predicate: str) -> list[tuple[str, ...]]:
+        """Arguments of every fact of ``predicate`` in the state."""
+        return [a.args for a in self.state if a.predicate == predicate]
+
+
 @dataclass
 class StreamAdapter:
-    """A callable behind a stream name; ``next_outputs`` answers one query."""
+    """A callable behind a stream name; ``next_outputs`` answers one query.
+
+    With ``uses_context`` the callable also receives ``context=`` (a :class:`StreamContext`,
+    or ``None`` when the caller has none).
+    """
 
     kind: AdapterKind
     fn: Callable[..., Any]
+    uses_context: bool = False
     _generators: dict[Hashable, Iterator[Any]] = field(default_factory=dict, repr=False)
 
-    def next_outputs(self, inputs: tuple[Any, ...], key: Hashable) -> Outputs | None:
+    def _call(self, inputs: tuple[Any, ...], context: StreamContext | None) -> Any:
+        if self.uses_context:
+            return self.fn(*inputs, context=context)
+        return self.fn(*inputs)
+
+    def next_outputs(
+        self, inputs: tuple[Any, ...], key: Hashable, context: StreamContext | None = None
+    ) -> Outputs | None:
         """One query: the outputs, or ``None`` for a failure. May raise (the runtime records it)."""
         if self.kind == "test":
-            return () if bool(self.fn(*inputs)) else None
+            return () if bool(self._call(inputs, context)) else None
         if self.kind == "fn":
-            out = self.fn(*inputs)
+            out = self._call(inputs, context)
             return None if out is None else tuple(out)
         gen = self._generators.get(key)
         if gen is None:
-            gen = iter(self.fn(*inputs))
+            gen = iter(self._call(inputs, context))
             self._generators[key] = gen
         try:
             out = next(gen)
@@ -48,16 +76,16 @@ class StreamAdapter:
         return getattr(self.fn, "__qualname__", repr(self.fn))
 
 
-def from_fn(fn: Callable[..., tuple[Any, ...] | None]) -> StreamAdapter:
+def from_fn(fn: Callable[..., tuple[Any, ...] | None], *, context: bool = False) -> StreamAdapter:
     """A function returning one output tuple, or ``None`` when it fails."""
-    return StreamAdapter("fn", fn)
+    return StreamAdapter("fn", fn, uses_context=context)
 
 
-def from_gen_fn(gen_fn: Callable[..., Any]) -> StreamAdapter:
-    """A generator function yielding output tuples."""
-    return StreamAdapter("gen", gen_fn)
+def from_gen_fn(gen_fn: Callable[..., Any], *, context: bool = False) -> StreamAdapter:
+    """A generator function yielding output tuples (the context is the first query's)."""
+    return StreamAdapter("gen", gen_fn, uses_context=context)
 
 
-def from_test(test: Callable[..., bool]) -> StreamAdapter:
+def from_test(test: Callable[..., bool], *, context: bool = False) -> StreamAdapter:
     """A boolean test for a stream with no outputs."""
-    return StreamAdapter("test", test)
+    return StreamAdapter("test", test, uses_context=context)

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner.pddl.structs import Stream, StreamSet
-from planner.streams.adapters import Outputs, StreamAdapter
+from planner.streams.adapters import Outputs, StreamAdapter, StreamContext
 
 log = logging.getLogger(__name__)
 
@@ -91,7 +91,14 @@ class StreamRuntime:
         except KeyError:
             raise KeyError(f"unknown stream {name!r} (known: {', '.join(self._streams)})") from None
 
-    def query(self, name: str, inputs: tuple[Any, ...], *, key: Hashable = None) -> QueryResult:
+    def query(
+        self,
+        name: str,
+        inputs: tuple[Any, ...],
+        *,
+        key: Hashable = None,
+        context: StreamContext | None = None,
+    ) -> QueryResult:
         """Query stream ``name`` once on input values; ``key`` identifies the input binding."""
         bound = self._bound(name)
         decl = bound.declaration
@@ -103,7 +110,9 @@ class StreamRuntime:
         error: str | None = None
         outputs: Outputs | None
         try:
-            outputs = bound.adapter.next_outputs(inputs, key if key is not None else inputs)
+            outputs = bound.adapter.next_outputs(
+                inputs, key if key is not None else inputs, context
+            )
         except Exception as exc:  # a sampler's failure is data, not a crash
             outputs = None
             error = f"{type(exc).__name__}: {exc}"

@@ -2,37 +2,34 @@
 
 from __future__ import annotations
 
+import random
+from collections.abc import Mapping
+
 from planner.domains import DomainSpec
+from planner.domains.kitchen.geometry import geometry_from_scene
+from planner.domains.kitchen.values import Conf
 from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
-from planner.scene import Scene, check_name, goal_atoms
+from planner.scene import Scene, goal_atoms
+from planner.sim.pr2_model import REST_ARM_CONF
+from planner.streams.adapters import StreamAdapter
 
-PLATFORM_KINDS = ("table", "sink", "stove")  # every kitchen has at least one of each
+GEOMETRY_KEY = "__kitchen_geometry__"  # where a kitchen problem keeps its geometry in values
+
 START_CONF = "q0"  # the robot's initial base and arm configuration
+ARM = "right"  # the arm that works; the other stays tucked
 
 
-def problem_from_scene(scene: Scene, domain: Domain) -> Problem:
-    """Objects, initial facts and goal of a kitchen scene (geometry is the samplers' business)."""
-    platforms = scene.get("platforms", list)
-    kinds: dict[str, str] = {}
-    for i, plat in enumerate(platforms):
-        if not isinstance(plat, dict):
-            raise scene.field_error(f"platforms[{i}]", "expected an object with name and kind")
-        name = check_name(scene, f"platforms[{i}].name", plat.get("name"))
-        kind = plat.get("kind")
-        if kind not in PLATFORM_KINDS:
-            raise scene.field_error(
-                f"platforms[{i}].kind", f"expected one of {', '.join(PLATFORM_KINDS)}, got {kind!r}"
-            )
-        if name in kinds:
-            raise scene.field_error(f"platforms[{i}].name", f"platform {name!r} is repeated")
-        kinds[name] = kind
-    for kind in PLATFORM_KINDS:
-        if kind not in kinds.values():
-            raise scene.field_error("platforms", f"the kitchen needs a platform of kind {kind!r}")
-    blocks = scene.get("blocks", list)
-    if not blocks:
-        raise scene.field_error("blocks", "expected at least one block")
-    default_start = next(n for n, k in kinds.items() if k == "table")
+def problem_from_scene(scene: Scene, domain: Domain, seed: int = 0) -> Problem:
+    """Objects, initial facts and goal of a kitchen scene (its geometry is checked too).
+
+    ``seed`` draws the initial block poses; they are the values of the ``p0-*`` objects.
+    """
+    geometry = geometry_from_scene(scene)
+    poses = geometry.initial_poses(seed)
+    values: dict[str, object] = {
+        START_CONF: Conf(geometry.robot.base, geometry.robot.torso, REST_ARM_CONF[ARM]),
+        GEOMETRY_KEY: geometry,
+    }
     init: set[Atom] = {
         Atom("conf", (START_CONF,)),
         Atom("at-conf", (START_CONF,)),
@@ -40,39 +37,45 @@ def problem_from_scene(scene: Scene, domain: Domain) -> Problem:
         Atom("can-move"),
     }
     objects = [TypedName(START_CONF)]
-    for name, kind in kinds.items():
-        objects.append(TypedName(name))
-        init.add(Atom("platform", (name,)))
-        if kind in ("sink", "stove"):
-            init.add(Atom(kind, (name,)))
-    names = set(kinds) | {START_CONF}
-    for i, block in enumerate(blocks):
-        if not isinstance(block, dict):
-            raise scene.field_error(f"blocks[{i}]", "expected an object with a name")
-        name = check_name(scene, f"blocks[{i}].name", block.get("name"))
-        if name in names:
-            raise scene.field_error(f"blocks[{i}].name", f"name {name!r} is already used")
-        start = block.get("on", default_start)
-        if start not in kinds:
-            raise scene.field_error(f"blocks[{i}].on", f"unknown platform {start!r}")
-        pose = f"p0-{name}"
-        names |= {name, pose}
-        objects += [TypedName(name), TypedName(pose)]
+    for plat in geometry.platforms:
+        objects.append(TypedName(plat.name))
+        init.add(Atom("platform", (plat.name,)))
+        if plat.kind in ("sink", "stove"):
+            init.add(Atom(plat.kind, (plat.name,)))
+    names = {p.name for p in geometry.platforms} | {START_CONF}
+    for block in geometry.blocks:
+        pose = initial_pose_name(block.name)
+        names |= {block.name, pose}
+        values[pose] = poses[block.name]
+        objects += [TypedName(block.name), TypedName(pose)]
         init |= {
-            Atom("block", (name,)),
-            Atom("pose", (name, pose)),
-            Atom("supported", (name, pose, start)),
-            Atom("at-pose", (name, pose)),
-            Atom("on", (name, start)),
+            Atom("block", (block.name,)),
+            Atom("pose", (block.name, pose)),
+            Atom("supported", (block.name, pose, block.start)),
+            Atom("at-pose", (block.name, pose)),
+            Atom("on", (block.name, block.start)),
         }
     arity = {p.name: p.arity for p in domain.predicates}
     goal = tuple(Literal(Atom(p, a)) for p, a in goal_atoms(scene, arity, names))
-    return Problem(scene.name, domain.name, tuple(objects), frozenset(init), goal, scene.source)
+    return Problem(
+        scene.name, domain.name, tuple(objects), frozenset(init), goal, scene.source, values
+    )
+
+
+def initial_pose_name(block: str) -> str:
+    """The object naming a block's initial pose (its value depends on the seed)."""
+    return f"p0-{block}"
+
+
+def _bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
+    from planner.domains.kitchen.samplers import bindings  # pybullet only when sampling
+
+    return bindings(problem, rng)
 
 
 SPEC = DomainSpec(
     name="kitchen",
     problem_from_scene=problem_from_scene,
-    bindings=None,  # TODO(#3): pybullet grasp, placement, IK and motion samplers
+    bindings=_bindings,
     diversity_ignore=("move",),  # moves only connect configurations; compare what is done
 )

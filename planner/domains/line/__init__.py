@@ -25,7 +25,9 @@ def _number(scene: Scene, path: str, value: Any) -> float:
     return float(value)
 
 
-def problem_from_scene(scene: Scene, domain: Domain) -> Problem:
+def problem_from_scene(scene: Scene, domain: Domain, seed: int = 0) -> Problem:
+    """The line's problem; nothing in it is random, so ``seed`` is unused."""
+    del seed
     values: dict[str, object] = {REACH_KEY: _number(scene, "reach", scene.data.get("reach"))}
     objects: list[TypedName] = []
     init: set[Atom] = {Atom("hand-empty")}

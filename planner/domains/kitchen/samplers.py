@@ -1,0 +1,302 @@
+"""The kitchen's four streams, real: grasps, placements, IK (pr2-ikfast) and motion (OMPL).
+
+Every sampler gets a :class:`~planner.streams.StreamContext`: the blocks' poses and what the hand
+holds at the point of the plan where the output is first needed. Each query ends in bounded time
+(an attempt budget) and returns outputs or ``None``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+import random
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from planner.domains.kitchen import GEOMETRY_KEY
+from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry
+from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
+from planner.domains.kitchen.world import KitchenWorld, block_pose_to_pose
+from planner.pddl.structs import Problem
+from planner.sim.ik import arm_ik
+from planner.sim.motion import MotionConfig, plan_base_motion, plan_joint_motion
+from planner.sim.pr2_model import (
+    ARM_JOINTS,
+    BASE_VELOCITY,
+    JOINT_LIMITS,
+    REST_ARM_CONF,
+    VELOCITY_LIMITS,
+)
+from planner.sim.transforms import invert, multiply, quat_from_euler, wrap_angle
+from planner.streams.adapters import StreamAdapter, StreamContext, from_fn
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class SamplerConfig:
+    """Budgets and distances of the kitchen samplers."""
+
+    placement_attempts: int = 30  # poses tried per placement query
+    placement_gap: float = 0.01  # metres kept between blocks on a platform
+    ik_attempts: int = 12  # collision-free base poses tried per IK query
+    base_attempts: int = 30  # candidate base poses drawn for each of those
+    reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
+    approach: float = 0.08  # pre-grasp distance along the tool's x axis, metres
+    motion: MotionConfig = field(default_factory=MotionConfig)  # OMPL, per motion segment
+    workspace_margin: float = 1.2  # base may roam this far beyond the fixtures, metres
+
+
+def _grasps(size: float, approach: float) -> list[Grasp]:
+    """Four top grasps (tool pointing down) and four side grasps, one per face. Side grasps come
+    in tilted down by ``SIDE_PITCH`` so the forearm clears the platform."""
+    grasps = []
+    for k in range(4):
+        yaw = k * math.pi / 2
+        top = ((0.0, 0.0, size / 2 - 0.025), quat_from_euler(0.0, math.pi / 2, yaw))
+        grasps.append(Grasp("top", top, approach))
+    for k in range(4):
+        yaw = k * math.pi / 2
+        side = ((0.0, 0.0, 0.01), quat_from_euler(0.0, SIDE_PITCH, yaw))
+        grasps.append(Grasp("side", side, approach))
+    return grasps
+
+
+SIDE_PITCH = 0.4  # radians below horizontal for side grasps
+
+
+BASE_HALF_WIDTH = 0.334  # half the PR2 base's side: no fixture may come closer to its centre
+
+
+def _rect_distance(x: float, y: float, rect: tuple[float, float, float, float]) -> float:
+    """Distance from a point to an axis-aligned rectangle (0 inside)."""
+    xmin, xmax, ymin, ymax = rect
+    dx = max(xmin - x, 0.0, x - xmax)
+    dy = max(ymin - y, 0.0, y - ymax)
+    return math.hypot(dx, dy)
+
+
+def _arm_duration(path: list[tuple[float, ...]], joints: tuple[str, ...]) -> float:
+    seconds = 0.0
+    for a, b in itertools.pairwise(path):
+        seconds += max(
+            abs(wrap_angle(y - x)) / VELOCITY_LIMITS[j]
+            for x, y, j in zip(a, b, joints, strict=True)
+        )
+    return seconds
+
+
+def _base_duration(path: list[BaseConf]) -> float:
+    linear, angular = BASE_VELOCITY
+    seconds = 0.0
+    for a, b in itertools.pairwise(path):
+        seconds += max(
+            math.hypot(b[0] - a[0], b[1] - a[1]) / linear, abs(wrap_angle(b[2] - a[2])) / angular
+        )
+    return seconds
+
+
+class KitchenSamplers:
+    """The samplers of one kitchen problem, sharing one pybullet world."""
+
+    def __init__(
+        self,
+        geometry: KitchenGeometry,
+        rng: random.Random,
+        *,
+        arm: str = "right",
+        config: SamplerConfig = SamplerConfig(),
+    ) -> None:
+        self.geometry = geometry
+        self.rng = rng
+        self.arm = arm
+        self.config = config
+        self.world = KitchenWorld(geometry, arm)
+        xs = [x for p in geometry.platforms for x in p.footprint()[:2]]
+        ys = [y for p in geometry.platforms for y in p.footprint()[2:]]
+        m = config.workspace_margin
+        self.bounds = (min(xs) - m, max(xs) + m, min(ys) - m, max(ys) + m)
+        self.lower = tuple(JOINT_LIMITS[j][0] for j in ARM_JOINTS[arm])
+        self.upper = tuple(JOINT_LIMITS[j][1] for j in ARM_JOINTS[arm])
+        self.rest = REST_ARM_CONF[arm]
+
+    def close(self) -> None:
+        self.world.close()
+
+    # --- context -----------------------------------------------------------------------------
+
+    def _apply(self, context: StreamContext | None) -> None:
+        """Put blocks where the context says and attach what the hand holds."""
+        poses: dict[str, BlockPose] = {}
+        held: tuple[str, Grasp] | None = None
+        if context is not None:
+            for block, pose in context.holds("at-pose"):
+                value = context.values.get(pose)
+                if isinstance(value, BlockPose):
+                    poses[block] = value
+            for block, grasp in context.holds("holding"):
+                value = context.values.get(grasp)
+                if isinstance(value, Grasp):
+                    held = (block, value)
+        self.world.hold(None)
+        self.world.set_blocks(poses)
+        if held is not None:
+            self.world.hold(*held)
+
+    # --- streams -----------------------------------------------------------------------------
+
+    def sample_grasp(self, block: str) -> tuple[Grasp]:
+        size = self.geometry.block(block).size
+        return (self.rng.choice(_grasps(size, self.config.approach)),)
+
+    def sample_placement(
+        self, block: str, platform: str, *, context: StreamContext | None = None
+    ) -> tuple[BlockPose] | None:
+        self._apply(context)
+        plat = self.geometry.platform(platform)
+        size = self.geometry.block(block).size
+        xmin, xmax, ymin, ymax = plat.footprint()
+        if xmax - xmin < size or ymax - ymin < size:
+            return None
+        poses = dict(self.world._placed)
+        for _ in range(self.config.placement_attempts):
+            yaw = self.rng.uniform(-math.pi, math.pi)
+            half = size / 2 * (abs(math.cos(yaw)) + abs(math.sin(yaw)))  # of the turned square
+            if xmax - xmin < 2 * half or ymax - ymin < 2 * half:
+                continue
+            pose = BlockPose(
+                self.rng.uniform(xmin + half, xmax - half),
+                self.rng.uniform(ymin + half, ymax - half),
+                plat.top + size / 2,
+                yaw,
+            )
+            poses[block] = pose
+            self.world.set_blocks(poses)
+            if not self.world.block_collides(block, margin=self.config.placement_gap):
+                return (pose,)
+        return None
+
+    def inverse_kinematics(
+        self, block: str, pose: BlockPose, grasp: Grasp, *, context: StreamContext | None = None
+    ) -> tuple[Conf] | None:
+        self._apply(context)
+        held = self.world.held
+        placed = dict(self.world._placed)
+        if held is None or held[0] != block:
+            placed[block] = pose  # picking: the block stands at the pose
+        self.world.hold(None)
+        self.world.set_blocks(placed)
+        tool_world = multiply(block_pose_to_pose(pose), grasp.tool_in_block)
+        pre_world = multiply(tool_world, ((-grasp.approach, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
+        torso = self.geometry.robot.torso
+        for _ in range(self.config.ik_attempts):
+            base = self._sample_base(pose)
+            if base is None:
+                continue
+            base_pose = ((base[0], base[1], 0.0), quat_from_euler(0.0, 0.0, base[2]))
+            tool = multiply(invert(base_pose), tool_world)
+            pre = multiply(invert(base_pose), pre_world)
+            for arm in arm_ik(self.arm, tool[0], tool[1], torso=torso)[:4]:
+                conf = Conf(base, torso, arm)
+                self.world.set_conf(conf)
+                if self.world.robot_collides(ignore=(block,)):
+                    continue
+                approach = arm_ik(self.arm, pre[0], pre[1], torso=torso, nearest_to=arm)
+                if not approach:
+                    continue
+                conf = Conf(base, torso, arm, approach[0])
+                self.world.set_conf(conf, approach=True)
+                if self.world.robot_collides():
+                    continue
+                return (conf,)
+        return None
+
+    def _sample_base(self, pose: BlockPose) -> BaseConf | None:
+        """A base pose facing the block, within reach, its footprint clear of every fixture."""
+        lo, hi = self.config.reach
+        for _ in range(self.config.base_attempts):
+            phi = self.rng.uniform(-math.pi, math.pi)
+            d = self.rng.uniform(lo, hi)
+            x, y = pose.x - d * math.cos(phi), pose.y - d * math.sin(phi)
+            if any(
+                _rect_distance(x, y, p.footprint()) < BASE_HALF_WIDTH
+                for p in self.geometry.platforms
+            ):
+                continue
+            base = (x, y, wrap_angle(phi + self.rng.uniform(-0.6, 0.6)))
+            self.world.set_conf(Conf(base, self.geometry.robot.torso, self.rest))
+            if not self.world.robot_collides():
+                return base
+        return None
+
+    def plan_motion(
+        self, q1: Conf, q2: Conf, *, context: StreamContext | None = None
+    ) -> tuple[Trajectory] | None:
+        self._apply(context)
+        world = self.world
+        joints = ARM_JOINTS[self.arm]
+        holding = world.held[0] if world.held else None
+        segments: list[Segment] = []
+        cfg = self.config.motion
+
+        def arm_valid_at(base: BaseConf) -> Any:
+            def valid(arm: tuple[float, ...]) -> bool:
+                world.set_conf(Conf(base, q1.torso, arm))
+                return not world.robot_collides()
+
+            return valid
+
+        def arm_path(base: BaseConf, a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+            if max(abs(wrap_angle(x - y)) for x, y in zip(a, b, strict=True)) < 1e-6:
+                return True
+            path = plan_joint_motion(
+                a, b, arm_valid_at(base), lower=self.lower, upper=self.upper, config=cfg
+            )
+            if path is None:
+                return False
+            segments.append(Segment("arm", (base,), tuple(path), _arm_duration(path, joints)))
+            return True
+
+        start_arm = q1.approach_arm if q1.approach_arm is not None else q1.arm
+        if q1.approach_arm is not None:  # retreat straight back from the grasp
+            straight = [q1.arm, q1.approach_arm]
+            segments.append(
+                Segment("arm", (q1.base,), tuple(straight), _arm_duration(straight, joints))
+            )
+        if not arm_path(q1.base, start_arm, self.rest):
+            return None
+        if math.dist(q1.base[:2], q2.base[:2]) > 1e-6 or abs(wrap_angle(q1.base[2] - q2.base[2])):
+
+            def base_valid(base: BaseConf) -> bool:
+                world.set_conf(Conf(base, q1.torso, self.rest))
+                return not world.robot_collides()
+
+            path = plan_base_motion(q1.base, q2.base, base_valid, bounds=self.bounds, config=cfg)
+            if path is None:
+                return None
+            segments.append(Segment("base", tuple(path), (self.rest,), _base_duration(path)))
+        end_arm = q2.approach_arm if q2.approach_arm is not None else q2.arm
+        if not arm_path(q2.base, self.rest, end_arm):
+            return None
+        if q2.approach_arm is not None:  # final straight move onto the grasp
+            straight = [q2.approach_arm, q2.arm]
+            segments.append(
+                Segment("arm", (q2.base,), tuple(straight), _arm_duration(straight, joints))
+            )
+        return (Trajectory(q1, q2, tuple(segments), holding),)
+
+
+def bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
+    """The kitchen's samplers for ``problem`` (which carries its geometry in ``values``)."""
+    geometry = problem.values.get(GEOMETRY_KEY)
+    if not isinstance(geometry, KitchenGeometry):
+        raise ValueError("a kitchen problem must be built from a scene (its geometry is missing)")
+    s = KitchenSamplers(geometry, rng)
+    return {
+        "sample-grasp": from_fn(s.sample_grasp),
+        "sample-placement": from_fn(s.sample_placement, context=True),
+        "inverse-kinematics": from_fn(s.inverse_kinematics, context=True),
+        "plan-motion": from_fn(s.plan_motion, context=True),
+    }

@@ -1,0 +1,138 @@
+"""Motion planning with OMPL: RRT-Connect for the base in SE(2) and for an arm in joint space.
+
+The validity checker is a plain Python function (pybullet collision checks live with the
+caller). Planners are chosen by name from :data:`PLANNERS`; an unknown name lists the known.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+log = logging.getLogger(__name__)
+
+ou.setLogLevel(ou.LogLevel.LOG_WARN)
+
+PLANNERS: dict[str, Callable[[ob.SpaceInformation], ob.Planner]] = {
+    "rrtconnect": og.RRTConnect,
+    "rrt": og.RRT,
+    "rrtstar": og.RRTstar,
+}
+DEFAULT_PLANNER = "rrtconnect"  # RRT-Connect, simplified, as in eTAMP and PDDLStream's PR2
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    planner: str = DEFAULT_PLANNER  # OMPL planner by name
+    timeout_s: float = 1.0  # planning time limit of one query
+    resolution: float = 0.02  # collision-check resolution, fraction of the space's extent
+    waypoints: int = 0  # interpolate the simplified path to at least this many states (0: keep)
+
+    def __post_init__(self) -> None:
+        if self.planner not in PLANNERS:
+            raise ValueError(
+                f"unknown OMPL planner {self.planner!r} (known: {', '.join(sorted(PLANNERS))})"
+            )
+        if self.timeout_s <= 0 or not 0 < self.resolution < 1:
+            raise ValueError("timeout_s must be positive and resolution in (0, 1)")
+
+
+_seeded: list[int] = []  # OMPL's random generator takes one seed per process
+
+
+def seed_ompl(seed: int) -> None:
+    """Seed OMPL once per process (it refuses later seeds); later calls are ignored."""
+    if _seeded:
+        if _seeded[0] != seed:
+            log.debug("OMPL already seeded with %d; ignoring seed %d", _seeded[0], seed)
+        return
+    ou.RNG.setSeed(max(1, seed))
+    _seeded.append(seed)
+
+
+def _solve(ss: og.SimpleSetup, config: MotionConfig, seed: int | None) -> og.PathGeometric | None:
+    if seed is not None:
+        seed_ompl(seed)
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(config.resolution)
+    ss.setPlanner(PLANNERS[config.planner](si))
+    solved = ss.solve(config.timeout_s)
+    if not solved or not ss.haveExactSolutionPath():
+        return None
+    ss.simplifySolution()
+    path: og.PathGeometric = ss.getSolutionPath()
+    if config.waypoints:
+        path.interpolate(config.waypoints)
+    return path
+
+
+BaseConf = tuple[float, float, float]  # x, y, yaw
+
+
+def plan_base_motion(
+    start: BaseConf,
+    goal: BaseConf,
+    is_valid: Callable[[BaseConf], bool],
+    *,
+    bounds: tuple[float, float, float, float],
+    config: MotionConfig = MotionConfig(),
+    seed: int | None = None,
+) -> list[BaseConf] | None:
+    """A collision-free SE(2) path from start to goal inside (xmin, xmax, ymin, ymax)."""
+    space = ob.SE2StateSpace()
+    b = ob.RealVectorBounds(2)
+    b.setLow(0, bounds[0])
+    b.setHigh(0, bounds[1])
+    b.setLow(1, bounds[2])
+    b.setHigh(1, bounds[3])
+    space.setBounds(b)
+    ss = og.SimpleSetup(space)
+    ss.setStateValidityChecker(lambda s: is_valid((s.getX(), s.getY(), s.getYaw())))
+    s0, s1 = space.allocState(), space.allocState()
+    for state, conf in ((s0, start), (s1, goal)):
+        state.setX(conf[0])
+        state.setY(conf[1])
+        state.setYaw(math.remainder(conf[2], 2 * math.pi))
+    ss.setStartAndGoalStates(s0, s1)
+    path = _solve(ss, config, seed)
+    if path is None:
+        return None
+    return [(s.getX(), s.getY(), s.getYaw()) for s in path.getStates()]
+
+
+def plan_joint_motion(
+    start: Sequence[float],
+    goal: Sequence[float],
+    is_valid: Callable[[tuple[float, ...]], bool],
+    *,
+    lower: Sequence[float],
+    upper: Sequence[float],
+    config: MotionConfig = MotionConfig(),
+    seed: int | None = None,
+) -> list[tuple[float, ...]] | None:
+    """A collision-free joint-space path; all joints bounded (wrap continuous ones first)."""
+    n = len(start)
+    if not len(goal) == len(lower) == len(upper) == n:
+        raise ValueError("start, goal, lower and upper must have the same length")
+    space = ob.RealVectorStateSpace(n)
+    b = ob.RealVectorBounds(n)
+    for i in range(n):
+        b.setLow(i, lower[i])
+        b.setHigh(i, upper[i])
+    space.setBounds(b)
+    ss = og.SimpleSetup(space)
+    ss.setStateValidityChecker(lambda s: is_valid(tuple(s[i] for i in range(n))))
+    s0, s1 = space.allocState(), space.allocState()
+    for i in range(n):
+        s0[i], s1[i] = start[i], goal[i]
+    ss.setStartAndGoalStates(s0, s1)
+    path = _solve(ss, config, seed)
+    if path is None:
+        return None
+    return [tuple(s[i] for i in range(n)) for s in path.getStates()]

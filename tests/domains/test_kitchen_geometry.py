@@ -1,0 +1,65 @@
+"""Kitchen scene geometry: impossible scenes are refused by field; seeds give fixed poses."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from planner.domains.kitchen.geometry import geometry_from_scene
+from planner.scene import SceneError, load_scene
+
+
+def scene_with(tmp_path: Path, edit: object) -> object:
+    data = json.loads(Path(load_scene("kitchen-4").source).read_text())
+    edit(data)  # type: ignore[operator]
+    path = tmp_path / "k.json"
+    path.write_text(json.dumps(data))
+    return load_scene(str(path))
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d["blocks"][2].update(size=0.9), r"blocks\[2\].size: a 0.9 m block fits on no"),
+        (
+            lambda d: d["platforms"][2].update(center=[1.0, 0.3]),
+            r"platforms\[2\].center: stove overlaps table",
+        ),
+        (lambda d: d["platforms"][1].update(size=[0.3, -1, 0.7]), r"platforms\[1\].size"),
+        (lambda d: d["platforms"][0].update(color=[2, 0, 0, 1]), r"platforms\[0\].color"),
+        (lambda d: d["robot"].update(base=[1.1, 0.0, 0.0]), "robot.base: the robot starts inside"),
+        (lambda d: d["robot"].update(torso=0.9), r"robot.torso: torso lift must lie in"),
+        (lambda d: d["spawn"].update(min_gap=0.5), "blocks: no room for block"),
+    ],
+)
+def test_impossible_scenes_name_the_field(tmp_path: Path, edit: object, message: str) -> None:
+    scene = scene_with(tmp_path, edit)
+    with pytest.raises(SceneError, match=message):
+        geometry_from_scene(scene)  # type: ignore[arg-type]
+
+
+def test_seeded_initial_poses_lie_on_the_table_apart() -> None:
+    geometry = geometry_from_scene(load_scene("kitchen-8"))
+    table = geometry.platform("table")
+    xmin, xmax, ymin, ymax = table.footprint()
+    poses = geometry.initial_poses(seed=3)
+    assert poses == geometry.initial_poses(seed=3)
+    assert poses != geometry.initial_poses(seed=4)
+    for name, pose in poses.items():
+        assert xmin < pose.x < xmax and ymin < pose.y < ymax
+        assert pose.z == pytest.approx(table.top + geometry.block(name).size / 2)
+    items = list(poses.values())
+    for i, a in enumerate(items):
+        for b in items[i + 1 :]:
+            assert math.hypot(a.x - b.x, a.y - b.y) > 0.07  # no two blocks overlap
+
+
+def test_stove_is_crowded_by_four_blocks() -> None:
+    geometry = geometry_from_scene(load_scene("kitchen-4"))
+    stove = geometry.platform("stove")
+    block = geometry.blocks[0].size
+    # The paper's Fig. 1C: four 7 cm blocks only just fit on a ~22 cm stove.
+    assert stove.size[0] * stove.size[1] < 12 * block * block
