@@ -8,6 +8,7 @@ import logging
 import sys
 from collections import Counter
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 from planner.abstract import (
@@ -23,7 +24,9 @@ from planner.abstract import (
 )
 from planner.abstract.topk import DEFAULT_TOPK
 from planner.domains import get_domain, known_domains, problem_for_scene
+from planner.domains.kitchen.plan_io import PlanFileError
 from planner.pddl import PDDLError, Problem
+from planner.runs import PLANNERS
 from planner.scene import SceneError, known_scenes
 from planner.streams import StreamBindingError
 
@@ -32,6 +35,7 @@ log = logging.getLogger("tamp")
 # Errors a user can cause; they are reported in one line, without a traceback.
 USER_ERRORS = (
     PDDLError,
+    PlanFileError,
     SceneError,
     AbstractPlanningError,
     StreamBindingError,
@@ -88,6 +92,29 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ab.add_argument("--show", type=int, default=0, metavar="N", help="print N plans in full")
     ab.add_argument("--json", action="store_true", help="machine-readable output")
+
+    pl = sub.add_parser(
+        "plan",
+        help="plan a scene: skeletons, then bind their streams with the real samplers",
+        description="Plan a scene end to end and report planning and execution seconds.",
+    )
+    pl.add_argument("--scene", required=True, help="scene name (see `tamp scenes`)")
+    pl.add_argument("--seed", type=int, default=0, help="scene randomisation and sampler seed")
+    pl.add_argument("--planner", choices=PLANNERS, default="sequential", help="planner")
+    pl.add_argument("--k", type=_k, default=10, help="skeletons to try (default 10)")
+    pl.add_argument("--budget", type=_positive, default=300.0, help="seconds (default 300)")
+    pl.add_argument("--out", type=Path, help="write the bound plan here (JSON)")
+    pl.add_argument("--json", action="store_true", help="machine-readable summary")
+
+    va = sub.add_parser("validate", help="replay a bound plan in simulation")
+    va.add_argument("plan", type=Path, help="a plan file written by `tamp plan --out`")
+
+    re = sub.add_parser("render", help="render a scene to a PNG, headless")
+    re.add_argument("--scene", required=True)
+    re.add_argument("--seed", type=int, default=0)
+    re.add_argument("--out", type=Path, default=Path("kitchen.png"))
+    re.add_argument("--width", type=int, default=960)
+    re.add_argument("--height", type=int, default=720)
 
     sub.add_parser("scenes", help="list the known scenes")
     sub.add_parser("serve", help="start the dashboard")
@@ -219,6 +246,89 @@ def _print_text(
             print(f"  INVALID: {p['error']}")
 
 
+def cmd_plan(args: argparse.Namespace) -> int:
+    from planner.runs import RunConfig, run
+
+    config = RunConfig(
+        scene=args.scene, seed=args.seed, planner=args.planner, k=args.k, budget_s=args.budget
+    )
+    result, loaded, problem = run(config, progress=_progress_line())
+    if sys.stderr.isatty():
+        sys.stderr.write("\r\033[K")
+    execution_s: float | None = None
+    valid: bool | None = None
+    message = "no plan within the budget"
+    if result.bound is not None:
+        if loaded.spec.name != "kitchen":
+            raise ValueError("plans can only be validated and written for the kitchen")
+        from planner.domains.kitchen.plan_io import write_plan
+        from planner.domains.kitchen.validate import validate_plan
+
+        report = validate_plan(result.bound.skeleton.actions, result.bound.values, problem)
+        execution_s, valid, message = report.execution_s, report.ok, report.message
+        if args.out is not None:
+            write_plan(
+                args.out,
+                scene=args.scene,
+                seed=args.seed,
+                actions=result.bound.skeleton.actions,
+                values=result.bound.values,
+            )
+    counts = result.query_counts()
+    streams = sorted({s for s, _ in counts})
+    summary = {
+        "scene": args.scene,
+        "seed": args.seed,
+        "planner": args.planner,
+        "solved": result.solved,
+        "valid": valid,
+        "message": message,
+        "planning_s": round(result.planning_s, 3),
+        "topk_s": round(result.topk_s, 3),
+        "execution_s": None if execution_s is None else round(execution_s, 3),
+        "skeletons_tried": result.skeletons_tried,
+        "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
+        "plan_file": str(args.out) if args.out and result.solved else None,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        outcome = "solved" if result.solved else "not solved"
+        print(f"{args.scene} seed {args.seed} ({args.planner}): {outcome}; {message}")
+        print(f"  planning {result.planning_s:.2f} s (top-k {result.topk_s:.2f} s)", end="")
+        print(f", execution {execution_s:.2f} s" if execution_s is not None else "")
+        print(f"  skeletons tried: {result.skeletons_tried}")
+        for s in streams:
+            print(f"  {s:20} {counts[(s, True)]:4} ok {counts[(s, False)]:4} failed")
+        if summary["plan_file"]:
+            print(f"  plan written to {args.out}")
+    return 0 if result.solved and valid else 1
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from planner.domains.kitchen.plan_io import read_plan
+    from planner.domains.kitchen.validate import validate_plan
+
+    plan = read_plan(args.plan)
+    _, problem = problem_for_scene(plan.scene, seed=plan.seed)
+    report = validate_plan(plan.actions, plan.values, problem)
+    if report.ok:
+        print(f"{args.plan}: valid ({len(plan.actions)} actions, {report.execution_s:.2f} s)")
+        return 0
+    print(f"{args.plan}: INVALID at {report.message}")
+    return 1
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from planner.domains.kitchen.render import render_scene
+
+    info = render_scene(
+        args.scene, seed=args.seed, out=args.out, width=args.width, height=args.height
+    )
+    print(f"wrote {info.path}")
+    return 0
+
+
 def cmd_scenes(_: argparse.Namespace) -> int:
     for name in known_scenes():
         print(name)
@@ -231,7 +341,14 @@ def cmd_serve(_: argparse.Namespace) -> int:
     return 0
 
 
-COMMANDS = {"abstract": cmd_abstract, "scenes": cmd_scenes, "serve": cmd_serve}
+COMMANDS = {
+    "abstract": cmd_abstract,
+    "plan": cmd_plan,
+    "validate": cmd_validate,
+    "render": cmd_render,
+    "scenes": cmd_scenes,
+    "serve": cmd_serve,
+}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -6,6 +6,9 @@ the pure-geometry helpers do not load the IK solver):
 - :mod:`planner.sim.pr2_model`: the generated PR2 URDF (``scenes/pr2.urdf``), joint names,
   limits, velocity limits, rest arm poses.
 - :mod:`planner.sim.ik`: ``arm_ik`` / ``arm_fk``, PR2 IKFast with joint-limit filtering.
+- :mod:`planner.sim.bodies`: pybullet bodies, poses and contact queries (explicit client ids).
+- :mod:`planner.sim.motion`: OMPL RRT-Connect for the base (SE(2)) and an arm (joint space).
+- :mod:`planner.sim.transforms`: poses as (position, xyzw quaternion); ``to_wxyz`` for viser.
 """
 
-__all__ = ["ik", "pr2_model"]
+__all__ = ["bodies", "ik", "motion", "pr2_model", "transforms"]

@@ -31,7 +31,7 @@ DEFAULT_PLANNER = "rrtconnect"  # RRT-Connect, simplified, as in eTAMP and PDDLS
 class MotionConfig:
     planner: str = DEFAULT_PLANNER  # OMPL planner by name
     timeout_s: float = 1.0  # planning time limit of one query
-    resolution: float = 0.02  # collision-check resolution, fraction of the space's extent
+    resolution: float = 0.004  # collision-check step, share of the space extent (~2 cm, 0.05 rad)
     waypoints: int = 0  # interpolate the simplified path to at least this many states (0: keep)
 
     def __post_init__(self) -> None:

@@ -47,6 +47,7 @@ class SamplerConfig:
     approach: float = 0.08  # pre-grasp distance along the tool's x axis, metres
     motion: MotionConfig = field(default_factory=MotionConfig)  # OMPL, per motion segment
     workspace_margin: float = 1.2  # base may roam this far beyond the fixtures, metres
+    clearance: float = 0.01  # metres kept from obstacles along planned motions
 
 
 def _grasps(size: float, approach: float) -> list[Grasp]:
@@ -82,7 +83,7 @@ def _arm_duration(path: list[tuple[float, ...]], joints: tuple[str, ...]) -> flo
     seconds = 0.0
     for a, b in itertools.pairwise(path):
         seconds += max(
-            abs(wrap_angle(y - x)) / VELOCITY_LIMITS[j]
+            abs(y - x) / VELOCITY_LIMITS[j]
             for x, y, j in zip(a, b, joints, strict=True)
         )
     return seconds
@@ -208,7 +209,7 @@ class KitchenSamplers:
                     continue
                 conf = Conf(base, torso, arm, approach[0])
                 self.world.set_conf(conf, approach=True)
-                if self.world.robot_collides():
+                if self.world.robot_collides(clearance=self.config.clearance):
                     continue
                 return (conf,)
         return None
@@ -227,7 +228,7 @@ class KitchenSamplers:
                 continue
             base = (x, y, wrap_angle(phi + self.rng.uniform(-0.6, 0.6)))
             self.world.set_conf(Conf(base, self.geometry.robot.torso, self.rest))
-            if not self.world.robot_collides():
+            if not self.world.robot_collides(clearance=self.config.clearance):
                 return base
         return None
 
@@ -244,12 +245,12 @@ class KitchenSamplers:
         def arm_valid_at(base: BaseConf) -> Any:
             def valid(arm: tuple[float, ...]) -> bool:
                 world.set_conf(Conf(base, q1.torso, arm))
-                return not world.robot_collides()
+                return not world.robot_collides(clearance=self.config.clearance)
 
             return valid
 
         def arm_path(base: BaseConf, a: tuple[float, ...], b: tuple[float, ...]) -> bool:
-            if max(abs(wrap_angle(x - y)) for x, y in zip(a, b, strict=True)) < 1e-6:
+            if max(abs(x - y) for x, y in zip(a, b, strict=True)) < 1e-6:
                 return True
             path = plan_joint_motion(
                 a, b, arm_valid_at(base), lower=self.lower, upper=self.upper, config=cfg
@@ -271,7 +272,7 @@ class KitchenSamplers:
 
             def base_valid(base: BaseConf) -> bool:
                 world.set_conf(Conf(base, q1.torso, self.rest))
-                return not world.robot_collides()
+                return not world.robot_collides(clearance=self.config.clearance)
 
             path = plan_base_motion(q1.base, q2.base, base_valid, bounds=self.bounds, config=cfg)
             if path is None:

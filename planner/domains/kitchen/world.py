@@ -117,28 +117,32 @@ class KitchenWorld:
 
     # --- collisions --------------------------------------------------------------------------
 
-    def _touch(self, a: int, b: int, *, link_a: int | None = None) -> bool:
-        return bodies.in_contact(self.client, a, b, margin=PENETRATION, link_a=link_a)
-
-    def robot_collides(self, *, ignore: Iterable[str] = ()) -> bool:
+    def robot_collides(self, *, ignore: Iterable[str] = (), clearance: float = 0.0) -> bool:
         """The robot (and what it holds) against fixtures, placed blocks and its own base.
 
-        ``ignore`` names blocks the gripper may touch (the one it is about to grasp).
+        ``ignore`` names blocks the gripper may touch (the one it is about to grasp). Without
+        ``clearance`` resting contact is allowed and only overlaps over 1 mm count; planners ask
+        for a clearance so that what they plan between checked states stays free too.
         """
+        margin = clearance if clearance > 0 else PENETRATION
+
+        def touch(a: int, b: int, *, link_a: int | None = None) -> bool:
+            return bodies.in_contact(self.client, a, b, margin=margin, link_a=link_a)
+
         skip = set(ignore)
         held = self.held[0] if self.held else None
         obstacles = list(self.fixtures.values()) + [
             self.blocks[n] for n in self._placed if n not in skip and n != held
         ]
         for body in obstacles:
-            if self._touch(self.robot, body):
+            if touch(self.robot, body):
                 return True
         for link in self.arm_links:
             for base_link in self.base_links:
                 pts = p.getClosestPoints(
                     self.robot,
                     self.robot,
-                    distance=PENETRATION,
+                    distance=margin,
                     linkIndexA=link,
                     linkIndexB=base_link,
                     physicsClientId=self.client,
@@ -148,12 +152,10 @@ class KitchenWorld:
         if held is not None:
             body = self.blocks[held]
             for other in obstacles:
-                if self._touch(body, other):
+                if touch(body, other):
                     return True
             for base_link in self.base_links:
-                if self._touch(body, self.robot, link_a=None) and bodies.in_contact(
-                    self.client, self.robot, body, margin=PENETRATION, link_a=base_link
-                ):
+                if touch(self.robot, body, link_a=base_link):
                     return True
         return False
 

@@ -1,0 +1,225 @@
+"""Render a kitchen scene to a PNG, headless, with pybullet's software renderer.
+
+The scene is built as for planning (:class:`KitchenWorld`), the blocks are put at their seeded
+initial poses and the robot at its start configuration; a grey floor is added and a camera is
+placed beyond the table, facing the robot, looking down at about 45 degrees, far enough back that
+every body fits.
+The PNG is written with ``zlib`` and ``struct`` (no imaging library needed).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import struct
+import time
+import zlib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+import pybullet as p
+
+from planner.domains import get_domain
+from planner.domains.kitchen import ARM, GEOMETRY_KEY, START_CONF
+from planner.domains.kitchen.geometry import KitchenGeometry
+from planner.domains.kitchen.values import Conf
+from planner.domains.kitchen.world import KitchenWorld
+from planner.scene import load_scene
+from planner.sim import bodies
+from planner.sim.transforms import Vec3
+
+log = logging.getLogger(__name__)
+
+ROBOT = "robot"  # the robot's name in RenderInfo.pixels
+
+FOV_DEG = 35.0  # vertical field of view of the camera; narrow enough to keep boxes boxy
+PITCH_DEG = 45.0  # the camera looks down this far below the horizontal
+HEADING_DEG = 210.0  # direction the camera looks in, from +x; 180 = from behind the table at +x
+FIT_MARGIN = 1.1  # the camera backs off this much further than the tightest fit
+FLOOR_BORDER = 12.0  # the floor reaches this far (m) beyond the scene's bounding box
+FLOOR_COLOR = (0.7, 0.7, 0.68, 1.0)  # mid grey, so light fixtures and dark ones both stand out
+BACKGROUND = (235, 238, 242)  # light grey-blue where no body is seen
+LIGHT_DIRECTION = (0.9, 0.4, 2.0)  # towards the light: high, on the camera's side, from +x
+LIGHT_AMBIENT = 0.55  # ambient coefficient of the tiny renderer's Phong model
+LIGHT_DIFFUSE = 0.5  # diffuse coefficient
+LIGHT_SPECULAR = 0.05  # specular coefficient: little shine on the flat-coloured boxes
+SHADOWS = False  # the tiny renderer's shadow map smears long false shadows over a large floor
+
+
+@dataclass(frozen=True)
+class RenderInfo:
+    """What :func:`render_scene` wrote and how much of each named body the image shows."""
+
+    path: Path
+    width: int
+    height: int
+    pixels: Mapping[str, int]  # robot, each platform, each block -> pixels it covers
+
+    def hidden(self, min_pixels: int = 1) -> tuple[str, ...]:
+        """Names of the bodies covering fewer than ``min_pixels`` pixels."""
+        return tuple(name for name, n in self.pixels.items() if n < min_pixels)
+
+
+def render_scene(
+    scene_name_or_path: str, *, seed: int, out: Path, width: int = 960, height: int = 720
+) -> RenderInfo:
+    """Render the scene with its blocks at the poses drawn by ``seed`` and write a PNG to ``out``.
+
+    Raises :class:`~planner.scene.SceneError` for an unknown or invalid scene (or one that is not
+    a kitchen) and :class:`ValueError` when ``out``'s directory does not exist or the size is not
+    positive.
+    """
+    out = Path(out)
+    if not out.parent.is_dir():
+        raise ValueError(f"cannot write {out}: directory {out.parent} does not exist")
+    if width <= 0 or height <= 0:
+        raise ValueError(f"image size must be positive, got {width}x{height}")
+    start = time.perf_counter()
+    scene = load_scene(scene_name_or_path)
+    problem = get_domain("kitchen").problem_from_scene(scene, seed=seed)
+    geometry = problem.values[GEOMETRY_KEY]
+    conf = problem.values[START_CONF]
+    if not isinstance(geometry, KitchenGeometry) or not isinstance(conf, Conf):
+        raise TypeError(f"{scene.source}: the kitchen problem lacks its geometry or start conf")
+    with KitchenWorld(geometry, ARM) as world:
+        world.set_blocks(geometry.initial_poses(seed))
+        world.set_conf(conf)
+        named = {ROBOT: world.robot, **world.fixtures, **world.blocks}
+        rgb, seg = _render(world.client, list(named.values()), width, height)
+    _write_png(out, rgb)
+    ids, counts = np.unique(seg, return_counts=True)
+    by_id = dict(zip(ids.tolist(), counts.tolist(), strict=True))
+    pixels = {name: int(by_id.get(body, 0)) for name, body in named.items()}
+    log.info(
+        "rendered %s seed %d to %s (%dx%d) in %.2f s",
+        scene.name,
+        seed,
+        out,
+        width,
+        height,
+        time.perf_counter() - start,
+    )
+    info = RenderInfo(out, width, height, pixels)
+    if info.hidden():
+        log.warning("not visible in %s: %s", out, ", ".join(info.hidden()))
+    return info
+
+
+# --- camera ----------------------------------------------------------------------------------
+
+
+def _corners(client: int, bodies_: Iterable[int]) -> npt.NDArray[np.float64]:
+    """The corners of every link's axis-aligned bounding box, one row each."""
+    corners: list[tuple[float, float, float]] = []
+    for body in bodies_:
+        for link in range(-1, p.getNumJoints(body, physicsClientId=client)):
+            lo, hi = p.getAABB(body, link, physicsClientId=client)
+            corners += [
+                (x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])
+            ]
+    return np.array(corners, dtype=np.float64)
+
+
+def _camera(points: npt.NDArray[np.float64], aspect: float) -> tuple[Vec3, Vec3, Vec3]:
+    """Eye, target and up vector of a camera that sees all ``points`` (rows of x, y, z)."""
+    heading, pitch = math.radians(HEADING_DEG), math.radians(PITCH_DEG)
+    forward = np.array(
+        [
+            math.cos(pitch) * math.cos(heading),
+            math.cos(pitch) * math.sin(heading),
+            -math.sin(pitch),
+        ]
+    )
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    tan_v = math.tan(math.radians(FOV_DEG) / 2)
+    tan_h = tan_v * aspect
+    target = points.mean(axis=0)
+    # Centre the points across the view (exact for an orthographic view, close for this one).
+    across, vertical = (points - target) @ right, (points - target) @ up
+    target = target + right * (across.max() + across.min()) / 2
+    target = target + up * (vertical.max() + vertical.min()) / 2
+    offsets = points - target
+    across, vertical, depth = offsets @ right, offsets @ up, offsets @ forward
+    # A point at depth d + v.f is in view when |v.right| <= (d + v.f) tan(h / 2), same for up.
+    distance = max(
+        float(np.max(np.abs(across) / tan_h - depth)),
+        float(np.max(np.abs(vertical) / tan_v - depth)),
+    )
+    eye = target - forward * distance * FIT_MARGIN
+    return _vec(eye), _vec(target), _vec(up)
+
+
+def _vec(a: npt.NDArray[np.float64]) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def _render(
+    client: int, subjects: list[int], width: int, height: int
+) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.int32]]:
+    """RGB image (height x width x 3) and segmentation mask (body id per pixel, -1 for none)."""
+    points = _corners(client, subjects)
+    eye, target, up = _camera(points, width / height)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    half = (
+        (hi[0] - lo[0]) / 2 + FLOOR_BORDER,
+        (hi[1] - lo[1]) / 2 + FLOOR_BORDER,
+        0.005,
+    )
+    floor_center = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, -half[2])
+    floor = bodies.add_box(client, half, (floor_center, (0.0, 0.0, 0.0, 1.0)), FLOOR_COLOR)
+    try:
+        distance = math.dist(eye, target)
+        view = p.computeViewMatrix(eye, target, up, physicsClientId=client)
+        projection = p.computeProjectionMatrixFOV(
+            FOV_DEG, width / height, 0.05, distance * 4, physicsClientId=client
+        )
+        _, _, rgba, _, seg = p.getCameraImage(
+            width,
+            height,
+            viewMatrix=view,
+            projectionMatrix=projection,
+            lightDirection=LIGHT_DIRECTION,
+            lightColor=(1.0, 1.0, 1.0),
+            lightAmbientCoeff=LIGHT_AMBIENT,
+            lightDiffuseCoeff=LIGHT_DIFFUSE,
+            lightSpecularCoeff=LIGHT_SPECULAR,
+            shadow=int(SHADOWS),
+            renderer=p.ER_TINY_RENDERER,
+            physicsClientId=client,
+        )
+    finally:
+        p.removeBody(floor, physicsClientId=client)
+    rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+    mask = np.asarray(seg, dtype=np.int32).reshape(height, width)
+    rgb[mask < 0] = BACKGROUND
+    return rgb, mask
+
+
+# --- PNG -------------------------------------------------------------------------------------
+
+
+def _chunk(kind: bytes, data: bytes) -> bytes:
+    return (
+        struct.pack(">I", len(data))
+        + kind
+        + data
+        + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    )
+
+
+def _write_png(path: Path, rgb: npt.NDArray[np.uint8]) -> None:
+    """An 8-bit RGB PNG; every row uses filter 0 (none)."""
+    height, width, _ = rgb.shape
+    rows = np.concatenate([np.zeros((height, 1), dtype=np.uint8), rgb.reshape(height, -1)], axis=1)
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    path.write_bytes(
+        b"\x89PNG\r\n\x1a\n"
+        + _chunk(b"IHDR", header)
+        + _chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
+        + _chunk(b"IEND", b"")
+    )

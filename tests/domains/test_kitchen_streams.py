@@ -1,0 +1,106 @@
+"""The kitchen's real streams: a kitchen-1 skeleton binds and validates in simulation, a crowded
+stove makes placement fail, and validation catches broken plans."""
+
+from __future__ import annotations
+
+import random
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from planner.abstract import AbstractConfig, plan_abstract
+from planner.domains import problem_for_scene
+from planner.domains.kitchen import GEOMETRY_KEY
+from planner.domains.kitchen.geometry import BlockPose
+from planner.domains.kitchen.plan_io import read_plan, write_plan
+from planner.domains.kitchen.samplers import KitchenSamplers
+from planner.domains.kitchen.validate import validate_plan
+from planner.domains.kitchen.values import Trajectory
+from planner.pddl import Atom
+from planner.search import BoundPlan, bind_sequentially
+from planner.streams import StreamContext
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def kitchen1() -> tuple[object, object, BoundPlan]:
+    loaded, problem = problem_for_scene("kitchen-1", seed=0)
+    plan = plan_abstract(loaded.domain, loaded.streams, problem, AbstractConfig(k=1)).plans[0]
+    runtime = loaded.runtime(problem, seed=1)
+    bound, queries = bind_sequentially(plan, loaded.domain, problem, runtime)
+    assert bound is not None, [q.error for q in queries]
+    assert all(q.wall_s >= 0 and q.cpu_s >= 0 for q in queries)
+    return loaded, problem, bound
+
+
+def test_kitchen_1_binds_and_validates(kitchen1: tuple[object, object, BoundPlan]) -> None:
+    _, problem, bound = kitchen1
+    report = validate_plan(bound.skeleton.actions, bound.values, problem)  # type: ignore[arg-type]
+    assert report.ok, report.message
+    trajectories = [v for v in bound.values.values() if isinstance(v, Trajectory)]
+    assert len(trajectories) == 3  # to the block, to the sink, to the stove
+    assert report.execution_s == pytest.approx(sum(t.seconds for t in trajectories))
+    assert all(t.seconds > 0.5 for t in trajectories)
+
+
+def test_plan_file_round_trip_validates(
+    kitchen1: tuple[object, object, BoundPlan], tmp_path: Path
+) -> None:
+    _, _, bound = kitchen1
+    path = tmp_path / "plan.json"
+    write_plan(path, scene="kitchen-1", seed=0, actions=bound.skeleton.actions, values=bound.values)
+    plan = read_plan(path)
+    problem = problem_for_scene(plan.scene, seed=plan.seed)[1]
+    assert validate_plan(plan.actions, plan.values, problem).ok
+
+
+def test_validation_reports_the_first_violation(kitchen1: tuple[object, object, BoundPlan]) -> None:
+    _, problem, bound = kitchen1
+    actions = bound.skeleton.actions
+    no_clean = tuple(a for a in actions if a.name != "clean")
+    report = validate_plan(no_clean, bound.values, problem)  # type: ignore[arg-type]
+    assert not report.ok and "cooked before it is cleaned" in report.message
+    # Drive the first trajectory's base path through the middle of the table.
+    move = actions[0]
+    traj = bound.values[move.args[2]]
+    bad_segments = tuple(
+        replace(s, base=(s.base[0], (1.1, 0.0, 0.0), s.base[-1])) if s.kind == "base" else s
+        for s in traj.segments
+    )
+    values = {**bound.values, move.args[2]: replace(traj, segments=bad_segments)}
+    report = validate_plan(actions, values, problem)  # type: ignore[arg-type]
+    assert not report.ok and report.step == 0 and "collision in segment" in report.message
+    report = validate_plan(actions[:-1], bound.values, problem)  # type: ignore[arg-type]
+    assert not report.ok and "goal: b1 is not cooked" in report.message
+
+
+def _stove_rate(samplers: KitchenSamplers, spots: list[tuple[float, float]], trials: int) -> float:
+    """Success rate of placing b1 on the stove with other blocks at ``spots`` (x, y offsets
+    from the stove's centre)."""
+    stove = samplers.geometry.platform("stove")
+    (cx, cy), z = stove.center, stove.top + 0.035
+    state = {Atom("at-pose", (f"b{i + 2}", f"p{i}")) for i in range(len(spots))}
+    values = {f"p{i}": BlockPose(cx + x, cy + y, z, 0.0) for i, (x, y) in enumerate(spots)}
+    context = StreamContext(frozenset(state), values)
+    wins = sum(
+        samplers.sample_placement("b1", "stove", context=context) is not None for _ in range(trials)
+    )
+    return wins / trials
+
+
+def test_crowded_stove_makes_placement_fail() -> None:
+    _, problem = problem_for_scene("kitchen-4", seed=0)
+    samplers = KitchenSamplers(problem.values[GEOMETRY_KEY], random.Random(0))  # type: ignore[arg-type]
+    try:
+        empty = _stove_rate(samplers, [], 30)
+        # Three blocks packed into three corners leave the fourth corner free ...
+        packed = _stove_rate(samplers, [(-0.065, -0.065), (0.065, 0.065), (-0.065, 0.065)], 30)
+        # ... but one block carelessly put in the middle leaves no room on a 22 cm stove.
+        careless = _stove_rate(samplers, [(0.0, 0.0)], 30)
+    finally:
+        samplers.close()
+    assert empty == 1.0
+    assert packed > 0.5
+    assert careless < 0.1, (empty, packed, careless)

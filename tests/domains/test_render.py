@@ -1,0 +1,80 @@
+"""Rendering a kitchen to a PNG: a valid image of the asked size that shows every body."""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from pathlib import Path
+
+import pytest
+
+from planner.domains.kitchen.render import RenderInfo, render_scene
+from planner.scene import SceneError
+
+WIDTH, HEIGHT = 480, 360
+MIN_PIXELS = 30  # "clearly visible" for a 7 cm block at this size (it covers ~190 pixels)
+
+
+def read_png(path: Path) -> tuple[int, int, bytes]:
+    """Width, height and raw scanlines of an 8-bit RGB PNG; checks signature and every CRC."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG signature"
+    pos, chunks = 8, []
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + length]
+        (crc,) = struct.unpack(">I", data[pos + 8 + length : pos + 12 + length])
+        assert crc == zlib.crc32(kind + body) & 0xFFFFFFFF, f"bad CRC in {kind!r}"
+        chunks.append((kind, body))
+        pos += 12 + length
+    assert chunks[0][0] == b"IHDR" and chunks[-1][0] == b"IEND"
+    width, height, depth, color_type, _, _, _ = struct.unpack(">IIBBBBB", chunks[0][1])
+    assert (depth, color_type) == (8, 2), "expected 8-bit RGB"
+    raw = zlib.decompress(b"".join(body for kind, body in chunks if kind == b"IDAT"))
+    assert len(raw) == height * (1 + 3 * width)
+    return width, height, raw
+
+
+@pytest.fixture(scope="module")
+def seed3(tmp_path_factory: pytest.TempPathFactory) -> RenderInfo:
+    out = tmp_path_factory.mktemp("render") / "kitchen-4-seed3.png"
+    return render_scene("kitchen-4", seed=3, out=out, width=WIDTH, height=HEIGHT)
+
+
+@pytest.mark.slow
+def test_render_writes_a_png_of_the_asked_size(seed3: RenderInfo) -> None:
+    width, height, _ = read_png(seed3.path)
+    assert (width, height) == (WIDTH, HEIGHT) == (seed3.width, seed3.height)
+
+
+@pytest.mark.slow
+def test_robot_fixtures_and_every_block_are_visible(seed3: RenderInfo) -> None:
+    expected = {"robot", "table", "sink", "stove", "b1", "b2", "b3", "b4"}
+    assert set(seed3.pixels) == expected
+    small = {name: n for name, n in seed3.pixels.items() if n < MIN_PIXELS}
+    assert not small, f"barely visible: {small}"
+    assert seed3.hidden(MIN_PIXELS) == ()
+
+
+@pytest.mark.slow
+def test_different_seeds_give_different_images(seed3: RenderInfo, tmp_path: Path) -> None:
+    other = render_scene(
+        "kitchen-4", seed=4, out=tmp_path / "seed4.png", width=WIDTH, height=HEIGHT
+    )
+    again = render_scene(
+        "kitchen-4", seed=3, out=tmp_path / "again.png", width=WIDTH, height=HEIGHT
+    )
+    assert read_png(other.path)[2] != read_png(seed3.path)[2]
+    assert read_png(again.path)[2] == read_png(seed3.path)[2]
+
+
+def test_unknown_scene_raises_scene_error(tmp_path: Path) -> None:
+    with pytest.raises(SceneError, match="unknown scene 'kitchen-99'"):
+        render_scene("kitchen-99", seed=0, out=tmp_path / "x.png")
+
+
+def test_missing_output_directory_is_named(tmp_path: Path) -> None:
+    missing = tmp_path / "nowhere"
+    with pytest.raises(ValueError, match=f"directory {missing} does not exist"):
+        render_scene("kitchen-4", seed=0, out=missing / "x.png")
+    assert not missing.exists()
