@@ -6,7 +6,7 @@ import logging
 import time
 from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from planner.pddl.structs import Stream, StreamSet
 from planner.streams.adapters import Outputs, StreamAdapter, StreamContext
@@ -23,6 +23,14 @@ class StreamBindingError(Exception):
         super().__init__(message)
 
 
+@runtime_checkable
+class Timed(Protocol):
+    """An output that takes time to execute (a trajectory): its duration in seconds."""
+
+    @property
+    def seconds(self) -> float: ...
+
+
 @dataclass(frozen=True)
 class QueryResult:
     """One stream query: outputs (``None`` on failure) and what it cost."""
@@ -32,6 +40,13 @@ class QueryResult:
     wall_s: float
     cpu_s: float
     error: str | None = None  # set when the sampler raised or returned a malformed result
+
+    @property
+    def execution_s(self) -> float:
+        """Seconds to execute what the query produced (trajectories); 0 if nothing moves."""
+        if self.outputs is None:
+            return 0.0
+        return sum(float(o.seconds) for o in self.outputs if isinstance(o, Timed))
 
     @property
     def success(self) -> bool:

@@ -104,3 +104,16 @@ def test_crowded_stove_makes_placement_fail() -> None:
     assert empty == 1.0
     assert packed > 0.5
     assert careless < 0.1, (empty, packed, careless)
+
+
+def test_motion_queries_report_execution_seconds(
+    kitchen1: tuple[object, object, BoundPlan],
+) -> None:
+    loaded, problem, bound = kitchen1
+    runtime = loaded.runtime(problem, seed=5)  # type: ignore[attr-defined]
+    move = bound.skeleton.actions[0]
+    q1, q2 = bound.values[move.args[0]], bound.values[move.args[1]]
+    result = runtime.query("plan-motion", (q1, q2))
+    assert result.success and result.execution_s == pytest.approx(result.outputs[0].seconds)
+    grasp = runtime.query("sample-grasp", ("b1",))
+    assert grasp.success and grasp.execution_s == 0.0

@@ -1,0 +1,56 @@
+"""OMPL motion planning: paths avoid obstacles, blocked goals fail in bounded time."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import pytest
+
+from planner.sim.motion import MotionConfig, plan_base_motion, plan_joint_motion
+
+pytestmark = pytest.mark.slow
+
+
+def wall(c: tuple[float, float, float]) -> bool:
+    """A wall at |x| < 0.3 with a gap at y > 1."""
+    return not (abs(c[0]) < 0.3 and c[1] < 1.0)
+
+
+def test_base_path_goes_around_the_wall() -> None:
+    path = plan_base_motion((-1.0, 0.0, 0.0), (1.0, 0.0, math.pi / 2), wall, bounds=(-2, 2, -2, 2))
+    assert path is not None
+    assert path[0] == pytest.approx((-1.0, 0.0, 0.0))
+    assert path[-1] == pytest.approx((1.0, 0.0, math.pi / 2))
+    # Straight segments between waypoints stay clear of the wall, checked densely.
+    for a, b in itertools.pairwise(path):
+        for i in range(51):
+            t = i / 50
+            x, y = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
+            assert wall((x, y, 0.0)), (x, y)
+
+
+def test_blocked_goal_fails_within_its_time_limit() -> None:
+    def closed(c: tuple[float, float, float]) -> bool:
+        return abs(c[0]) > 0.3
+
+    config = MotionConfig(timeout_s=0.3)
+    assert (
+        plan_base_motion((-1, 0, 0), (1, 0, 0), closed, bounds=(-2, 2, -2, 2), config=config)
+        is None
+    )
+
+
+def test_joint_path_respects_bounds_and_obstacle() -> None:
+    def valid(q: tuple[float, ...]) -> bool:
+        return not (0.4 < q[0] < 0.6 and q[1] < 0.9)
+
+    path = plan_joint_motion((0.0, 0.0), (1.0, 0.0), valid, lower=(-1, -1), upper=(2, 2))
+    assert path is not None and path[-1] == pytest.approx((1.0, 0.0))
+    assert all(-1 <= v <= 2 for q in path for v in q)
+    assert any(q[1] >= 0.9 for q in path)  # it went over the obstacle
+
+
+def test_unknown_planner_lists_the_known() -> None:
+    with pytest.raises(ValueError, match=r"unknown OMPL planner 'prm' .known: rrt, rrtconnect"):
+        MotionConfig(planner="prm")
