@@ -8,6 +8,7 @@ import logging
 import sys
 from collections import Counter
 from collections.abc import Callable, Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +27,7 @@ from planner.abstract.topk import DEFAULT_TOPK
 from planner.domains import get_domain, known_domains, problem_for_scene
 from planner.domains.kitchen.plan_io import PlanFileError
 from planner.pddl import PDDLError, Problem
-from planner.runs import PLANNERS
+from planner.runs import DEFAULT_PLANNER, PLANNERS
 from planner.scene import SceneError, known_scenes
 from planner.streams import StreamBindingError
 
@@ -100,11 +101,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     pl.add_argument("--scene", required=True, help="scene name (see `tamp scenes`)")
     pl.add_argument("--seed", type=int, default=0, help="scene randomisation and sampler seed")
-    pl.add_argument("--planner", choices=PLANNERS, default="sequential", help="planner")
-    pl.add_argument("--k", type=_k, default=10, help="skeletons to try (default 10)")
+    pl.add_argument("--planner", choices=PLANNERS, default=DEFAULT_PLANNER, help="planner")
+    pl.add_argument("--k", type=_k, default=50, help="skeletons from top-k (default 50)")
     pl.add_argument("--budget", type=_positive, default=300.0, help="seconds (default 300)")
     pl.add_argument("--out", type=Path, help="write the bound plan here (JSON)")
     pl.add_argument("--json", action="store_true", help="machine-readable summary")
+    pl.add_argument(
+        "--db", type=Path, help="record the run in this SQLite file (default: user data)"
+    )
+    pl.add_argument("--no-record", action="store_true", help="do not record the run")
 
     va = sub.add_parser("validate", help="replay a bound plan in simulation")
     va.add_argument("plan", type=Path, help="a plan file written by `tamp plan --out`")
@@ -248,60 +253,101 @@ def _print_text(
 
 def cmd_plan(args: argparse.Namespace) -> int:
     from planner.runs import RunConfig, run
+    from planner.store import RunStore, StoreSink, default_db_path
 
     config = RunConfig(
         scene=args.scene, seed=args.seed, planner=args.planner, k=args.k, budget_s=args.budget
     )
-    result, loaded, problem = run(config, progress=_progress_line())
+    problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
+    store = None if args.no_record else RunStore(args.db or default_db_path())
+    run_id: str | None = None
+    sink = None
+    if store is not None:
+        run_id = store.create_run(args.scene, args.seed, args.planner, asdict(config))
+        sink = StoreSink(store, run_id)
+    try:
+        result, loaded, problem = run(config, sink=sink, run_id=run_id, progress=_progress_line())
+    except KeyboardInterrupt:
+        if store is not None and run_id is not None and sink is not None:
+            sink.close()
+            store.finish_run(run_id, "cancelled", message="interrupted by the user")
+        raise
+    except Exception as exc:
+        if store is not None and run_id is not None and sink is not None:
+            sink.close()
+            store.finish_run(run_id, "failed", message=f"{type(exc).__name__}: {exc}")
+        raise
     if sys.stderr.isatty():
         sys.stderr.write("\r\033[K")
-    execution_s: float | None = None
     valid: bool | None = None
-    message = "no plan within the budget"
+    message = f"no plan ({result.status})"
+    plan_data: dict[str, Any] | None = None
     if result.bound is not None:
-        if loaded.spec.name != "kitchen":
-            raise ValueError("plans can only be validated and written for the kitchen")
-        from planner.domains.kitchen.plan_io import write_plan
+        from planner.domains.kitchen.plan_io import plan_to_dict
         from planner.domains.kitchen.validate import validate_plan
 
-        report = validate_plan(result.bound.skeleton.actions, result.bound.values, problem)
-        execution_s, valid, message = report.execution_s, report.ok, report.message
-        if args.out is not None:
-            write_plan(
-                args.out,
+        if loaded.spec.name != "kitchen":
+            valid, message = True, "solved (validation in simulation is for the kitchen)"
+        else:
+            report = validate_plan(result.bound.skeleton.actions, result.bound.values, problem)
+            valid, message = report.ok, report.message
+            plan_data = plan_to_dict(
                 scene=args.scene,
                 seed=args.seed,
                 actions=result.bound.skeleton.actions,
                 values=result.bound.values,
             )
+            if args.out is not None:
+                args.out.write_text(json.dumps(plan_data, indent=1) + "\n", encoding="utf-8")
+    if sink is not None and store is not None and run_id is not None:
+        sink.close()
+        store.finish_run(
+            run_id,
+            result.status if valid is not False else "failed",
+            planning_s=result.planning_s,
+            execution_s=result.execution_s,
+            oracle_s=result.oracle_s,
+            queries=len(result.queries),
+            message=message,
+            plan=plan_data,
+        )
     counts = result.query_counts()
     streams = sorted({s for s, _ in counts})
     summary = {
+        "run_id": result.run_id,
         "scene": args.scene,
         "seed": args.seed,
         "planner": args.planner,
-        "solved": result.solved,
+        "status": result.status,
         "valid": valid,
         "message": message,
         "planning_s": round(result.planning_s, 3),
         "topk_s": round(result.topk_s, 3),
-        "execution_s": None if execution_s is None else round(execution_s, 3),
-        "skeletons_tried": result.skeletons_tried,
+        "oracle_s": None if result.oracle_s is None else round(result.oracle_s, 3),
+        "execution_s": None if result.execution_s is None else round(result.execution_s, 3),
+        "nodes": result.nodes,
         "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
-        "plan_file": str(args.out) if args.out and result.solved else None,
+        "plan_file": str(args.out) if args.out and plan_data else None,
+        "db": None if store is None else str(args.db or default_db_path()),
     }
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
-        outcome = "solved" if result.solved else "not solved"
-        print(f"{args.scene} seed {args.seed} ({args.planner}): {outcome}; {message}")
-        print(f"  planning {result.planning_s:.2f} s (top-k {result.topk_s:.2f} s)", end="")
-        print(f", execution {execution_s:.2f} s" if execution_s is not None else "")
-        print(f"  skeletons tried: {result.skeletons_tried}")
+        print(f"{args.scene} seed {args.seed} ({args.planner}): {result.status}; {message}")
+        line = f"  planning {result.planning_s:.2f} s (top-k {result.topk_s:.2f} s"
+        if result.oracle_s is not None:
+            line += f", oracle {result.oracle_s:.2f} s"
+        line += ")"
+        if result.execution_s is not None:
+            line += f", execution {result.execution_s:.2f} s"
+        print(line)
+        print(f"  tree nodes: {result.nodes}, queries: {len(result.queries)}")
         for s in streams:
-            print(f"  {s:20} {counts[(s, True)]:4} ok {counts[(s, False)]:4} failed")
+            print(f"  {s:20} {counts[(s, True)]:5} ok {counts[(s, False)]:5} failed")
         if summary["plan_file"]:
             print(f"  plan written to {args.out}")
+        if summary["db"]:
+            print(f"  run {result.run_id} recorded in {summary['db']}")
     return 0 if result.solved and valid else 1
 
 

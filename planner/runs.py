@@ -1,53 +1,75 @@
 """A planning run from a scene: abstract plans, then binding, then the result and its figures.
 
-The only planner here is ``sequential`` (bind each skeleton's streams in order, skeletons in
-cost order); the tree searches of issues 4 and 5 join the :data:`PLANNERS` registry.
+Planners (:data:`PLANNERS`): ``baseline`` is eTAMP's progressive-widening tree search;
+``sequential`` binds each skeleton's streams in order (the simplest thing that can work, kept as
+a reference). Every run reports through an event sink (:mod:`planner.events`).
 """
 
 from __future__ import annotations
 
 import logging
 import time
+import uuid
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.domains import LoadedDomain, problem_for_scene
+from planner.events import (
+    AbstractPlansFound,
+    Emitter,
+    EventSink,
+    ListSink,
+    RunCancelled,
+    RunFailed,
+    RunFinished,
+    RunStarted,
+)
 from planner.pddl.structs import Problem
-from planner.search.binding import BoundPlan, bind_sequentially
+from planner.search.baseline import BaselineConfig
+from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
+from planner.search.mcts import BaselinePolicy, TreeSearch
 from planner.streams.runtime import QueryResult
 
 log = logging.getLogger(__name__)
 
-PLANNERS = ("sequential",)  # known planner names
+PLANNERS = ("baseline", "sequential")  # known planner names
+DEFAULT_PLANNER = "baseline"
 
 
 @dataclass(frozen=True)
 class RunConfig:
     scene: str
     seed: int = 0  # draws the scene's random parts and seeds the samplers
-    planner: str = "sequential"  # one of PLANNERS
-    k: int = 10  # skeletons asked of the top-k planner
-    attempts: int = 10  # queries of one stream before the binder restarts
-    restarts: int = 3  # restarts of one skeleton before the next is tried
+    planner: str = DEFAULT_PLANNER  # one of PLANNERS
+    k: int = 50  # skeletons asked of the top-k planner (the paper's k)
     budget_s: float = 300.0  # wall-clock budget of the run, top-k included
+    attempts: int = 10  # sequential only: queries of one stream before a restart
+    restarts: int = 3  # sequential only: restarts of one skeleton before the next
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
             raise ValueError(f"unknown planner {self.planner!r} (known: {', '.join(PLANNERS)})")
-        if self.budget_s <= 0 or self.k < 1 or self.attempts < 1 or self.restarts < 1:
-            raise ValueError("budget, k, attempts and restarts must be positive")
+        if not 0 < self.budget_s <= 86_400:
+            raise ValueError(f"budget must be between 0 and 86400 s, got {self.budget_s}")
+        if self.k < 1 or self.attempts < 1 or self.restarts < 1:
+            raise ValueError("k, attempts and restarts must be positive")
 
 
 @dataclass(frozen=True)
 class RunResult:
+    run_id: str
     config: RunConfig
+    status: str  # solved, timeout, failed
     bound: BoundPlan | None
     planning_s: float  # wall seconds from start (top-k included) to the bound plan or the end
     topk_s: float
+    execution_s: float | None  # trajectory seconds of the bound plan
+    oracle_s: float | None  # top-k + successful queries on the solution branch
     queries: list[QueryResult] = field(repr=False)
-    skeletons_tried: int = 0
+    nodes: int = 0  # tree nodes (baseline) or skeletons tried (sequential)
 
     @property
     def solved(self) -> bool:
@@ -57,27 +79,150 @@ class RunResult:
         return Counter((q.stream, q.success) for q in self.queries)
 
 
+def jsonable(value: Any) -> Any:
+    """A value as JSON data: kitchen values through their codec, numbers as they are."""
+    if value is None or isinstance(value, str | int | float | bool):
+        return value
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    try:
+        from planner.domains.kitchen.plan_io import encode
+
+        return encode(value)
+    except TypeError:
+        return repr(value)
+
+
 def run(
-    config: RunConfig, *, progress: Callable[[str], None] | None = None
+    config: RunConfig,
+    *,
+    sink: EventSink | None = None,
+    run_id: str | None = None,
+    progress: Callable[[str], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> tuple[RunResult, LoadedDomain, Problem]:
+    """Plan ``config.scene``; every step is reported to ``sink``."""
+    run_id = run_id or uuid.uuid4().hex
+    emitter = Emitter(run_id, sink if sink is not None else ListSink())
+    start = time.perf_counter()
+    emitter.emit(
+        RunStarted,
+        scene=config.scene,
+        seed=config.seed,
+        planner=config.planner,
+        config=asdict(config),
+    )
+    try:
+        result, loaded, problem = _run(config, run_id, emitter, start, progress, should_stop)
+    except KeyboardInterrupt:
+        emitter.emit(RunCancelled, reason="interrupted by the user")
+        raise
+    except Exception as exc:
+        emitter.emit(RunFailed, error=f"{type(exc).__name__}: {exc}")
+        raise
+    emitter.emit(
+        RunFinished,
+        status=result.status,
+        planning_s=result.planning_s,
+        execution_s=result.execution_s,
+        oracle_s=result.oracle_s,
+        queries=len(result.queries),
+        message="solved" if result.solved else f"no plan ({result.status})",
+    )
+    return result, loaded, problem
+
+
+def _run(
+    config: RunConfig,
+    run_id: str,
+    emitter: Emitter,
+    start: float,
+    progress: Callable[[str], None] | None,
+    should_stop: Callable[[], bool] | None,
 ) -> tuple[RunResult, LoadedDomain, Problem]:
     say = progress or (lambda _m: None)
-    start = time.perf_counter()
     loaded, problem = problem_for_scene(config.scene, seed=config.seed)
     abstract = plan_abstract(
         loaded.domain,
         loaded.streams,
         problem,
         AbstractConfig(k=config.k, diversity_ignore=loaded.spec.diversity_ignore),
+        progress=say,
+    )
+    topk_s = abstract.seconds["topk"]
+    emitter.emit(
+        AbstractPlansFound,
+        plans=[
+            {
+                "index": i,
+                "cost": p.cost,
+                "actions": [str(a) for a in p.actions],
+                "streams": [str(s) for s in p.stream_plan],
+            }
+            for i, p in enumerate(abstract.plans)
+        ],
+        seconds=abstract.seconds["total"],
     )
     runtime = loaded.runtime(problem, seed=config.seed)
+    deadline = start + config.budget_s
+    if config.planner == "sequential":
+        return _sequential(config, run_id, abstract.plans, loaded, problem, runtime, start, topk_s)
+    initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
+    initial.update(problem.values)
+    search = TreeSearch(
+        abstract.plans,
+        [stream_contexts(p, loaded.domain, problem) for p in abstract.plans],
+        initial,
+        runtime,
+        BaselinePolicy(BaselineConfig()),
+        emitter=emitter,
+        encode=jsonable,
+        progress=say,
+        should_stop=should_stop,
+    )
+    outcome = search.run(deadline=deadline, start=start)
+    queries = [r for _, r in outcome.queries]
+    planning_s = time.perf_counter() - start
+    bound = None
+    execution_s = oracle_s = None
+    if outcome.solved and outcome.plan_index is not None:
+        skeleton = abstract.plans[outcome.plan_index]
+        bound = BoundPlan(skeleton, {**initial, **outcome.values})
+        branch = set(search.tree.path(outcome.node_id or 0))
+        execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
+        oracle_s = topk_s + outcome.oracle_query_s
+    result = RunResult(
+        run_id,
+        config,
+        outcome.status,
+        bound,
+        planning_s,
+        topk_s,
+        execution_s,
+        oracle_s,
+        queries,
+        len(search.tree),
+    )
+    return result, loaded, problem
+
+
+def _sequential(
+    config: RunConfig,
+    run_id: str,
+    plans: tuple[Any, ...],
+    loaded: LoadedDomain,
+    problem: Problem,
+    runtime: Any,
+    start: float,
+    topk_s: float,
+) -> tuple[RunResult, LoadedDomain, Problem]:
     queries: list[QueryResult] = []
     bound: BoundPlan | None = None
     tried = 0
-    for plan in abstract.plans:
+    for plan in plans:
         if time.perf_counter() - start > config.budget_s:
             break
         tried += 1
-        say(f"skeleton {tried}/{len(abstract.plans)}: {len(queries)} queries so far")
         bound, made = bind_sequentially(
             plan,
             loaded.domain,
@@ -89,12 +234,17 @@ def run(
         queries += made
         if bound is not None:
             break
+    execution_s = None
+    if bound is not None:
+        execution_s = sum(float(getattr(v, "seconds", 0.0)) for v in _trajectories(bound))
+    status = "solved" if bound is not None else "timeout"
+    planning_s = time.perf_counter() - start
     result = RunResult(
-        config,
-        bound,
-        time.perf_counter() - start,
-        abstract.seconds["topk"],
-        queries,
-        tried,
+        run_id, config, status, bound, planning_s, topk_s, execution_s, None, queries, tried
     )
     return result, loaded, problem
+
+
+def _trajectories(bound: BoundPlan) -> list[Any]:
+    used = {a for act in bound.skeleton.actions for a in act.args}
+    return [v for k, v in bound.values.items() if k in used and hasattr(v, "segments")]

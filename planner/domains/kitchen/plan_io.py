@@ -139,6 +139,25 @@ def decode(data: Any, path: str) -> Any:
     raise PlanFileError(f"{path}.type: unknown value type {kind!r}")
 
 
+def plan_to_dict(
+    *, scene: str, seed: int, actions: tuple[GroundAction, ...], values: Mapping[str, Any]
+) -> dict[str, Any]:
+    """The plan file's contents: the actions, and the values of the objects they use."""
+    used = {a for act in actions for a in act.args}
+    return {
+        "format": FORMAT,
+        "domain": "kitchen",
+        "scene": scene,
+        "seed": seed,
+        "actions": [str(a) for a in actions],
+        "values": {
+            n: encode(values[n])
+            for n in sorted(used)
+            if n in values and not isinstance(values[n], str)
+        },
+    }
+
+
 def write_plan(
     path: Path,
     *,
@@ -147,16 +166,7 @@ def write_plan(
     actions: tuple[GroundAction, ...],
     values: Mapping[str, Any],
 ) -> None:
-    """Write the actions and the values of the objects they use that are not the scene's own."""
-    used = {a for act in actions for a in act.args}
-    data = {
-        "format": FORMAT,
-        "domain": "kitchen",
-        "scene": scene,
-        "seed": seed,
-        "actions": [str(a) for a in actions],
-        "values": {n: encode(values[n]) for n in sorted(used) if not isinstance(values[n], str)},
-    }
+    data = plan_to_dict(scene=scene, seed=seed, actions=actions, values=values)
     path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
 
 

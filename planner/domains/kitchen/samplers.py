@@ -21,7 +21,7 @@ from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Traje
 from planner.domains.kitchen.world import KitchenWorld, block_pose_to_pose
 from planner.pddl.structs import Problem
 from planner.sim.ik import arm_ik
-from planner.sim.motion import MotionConfig, plan_base_motion, plan_joint_motion
+from planner.sim.motion import MotionConfig, plan_base_motion, plan_joint_motion, seed_ompl
 from planner.sim.pr2_model import (
     ARM_JOINTS,
     BASE_VELOCITY,
@@ -83,8 +83,7 @@ def _arm_duration(path: list[tuple[float, ...]], joints: tuple[str, ...]) -> flo
     seconds = 0.0
     for a, b in itertools.pairwise(path):
         seconds += max(
-            abs(y - x) / VELOCITY_LIMITS[j]
-            for x, y, j in zip(a, b, joints, strict=True)
+            abs(y - x) / VELOCITY_LIMITS[j] for x, y, j in zip(a, b, joints, strict=True)
         )
     return seconds
 
@@ -115,6 +114,7 @@ class KitchenSamplers:
         self.arm = arm
         self.config = config
         self.world = KitchenWorld(geometry, arm)
+        seed_ompl(rng.randrange(1, 2**31))  # OMPL takes one seed per process: the first run's
         xs = [x for p in geometry.platforms for x in p.footprint()[:2]]
         ys = [y for p in geometry.platforms for y in p.footprint()[2:]]
         m = config.workspace_margin

@@ -103,7 +103,9 @@ class _Replay:
                 return f"the robot collides in the approach pose for {block}"
         return None
 
-    def move(self, q1: Conf, q2: Conf, traj: Trajectory, next_block: str | None) -> str | None:
+    def move(
+        self, q1: Conf, q2: Conf, traj: Trajectory, last_block: str | None, next_block: str | None
+    ) -> str | None:
         if not _same_conf(self.conf, q1) or not _same_conf(traj.start, q1):
             return "the trajectory does not start where the robot is"
         if not _same_conf(traj.end, q2):
@@ -113,7 +115,9 @@ class _Replay:
             return f"the trajectory carries {traj.holding}, the hand holds {held}"
         for j, seg in enumerate(traj.segments):
             straight = seg.kind == "arm" and len(seg.arm) == 2
-            ignore = tuple(b for b in (held, next_block) if b is not None) if straight else ()
+            # Retreating from the last block or approaching the next one, the gripper touches it.
+            near = (held, last_block, next_block)
+            ignore = tuple(b for b in near if b is not None) if straight else ()
             if seg.kind == "arm":
                 base = seg.base[0]
                 points = _interpolate(seg.arm, ARM_STEP)
@@ -159,7 +163,10 @@ def validate_plan(
                 False, step, f"step {step} {actions[step]}: {message}", r.seconds
             )
 
+        last_block: str | None = None
         for step, act in enumerate(actions):
+            if step and actions[step - 1].name in ("pick", "place", "cook"):
+                last_block = actions[step - 1].args[0]
             try:
                 args = [allv[a] for a in act.args]
             except KeyError as exc:
@@ -173,7 +180,7 @@ def validate_plan(
                     isinstance(q1, Conf) and isinstance(q2, Conf) and isinstance(traj, Trajectory)
                 ):
                     return fail(step, "expected two configurations and a trajectory")
-                err = r.move(q1, q2, traj, next_block)
+                err = r.move(q1, q2, traj, last_block, next_block)
             elif name == "pick":
                 block, pose, _plat, grasp, conf = args
                 if r.held is not None:

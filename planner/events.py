@@ -1,0 +1,552 @@
+"""The event protocol: one frozen dataclass per thing that happens during a run.
+
+The planner emits events to an :class:`EventSink` and never knows who listens: the run store
+(:mod:`planner.store`), the websocket, the 3D viewer and the CLI progress line all receive the
+same objects, and the JSON of :func:`event_to_json` is what goes over the wire and into the
+database. Every event carries ``run_id``, ``seq`` (0, 1, 2, ... per run, no gaps when emitted
+through an :class:`Emitter`) and ``t`` (seconds since the run started).
+
+Tree conventions for :class:`NodeAdded` (as in :mod:`planner.search.tree`): the root has
+``parent_id=None``, ``stream=None``, ``plan_index=-1`` and ``depth=0``; its children are the
+stream plans (``depth=0``, ``stream=None``, ``plan_index`` = the plan's index in
+:class:`AbstractPlansFound`); a node at depth ``d >= 1`` is one result of querying the ``d``-th
+stream of its plan.
+
+Every payload is JSON-friendly (str, int, finite float, bool, None, lists, dicts with str keys),
+checked when the event is built, so a bad value fails where it is made, not in a listener.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import math
+import numbers
+import threading
+import time
+import types
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import (
+    Any,
+    ClassVar,
+    NoReturn,
+    Protocol,
+    TypeAlias,
+    TypeVar,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+)
+
+log = logging.getLogger(__name__)
+
+FINISH_STATUSES = ("solved", "failed", "timeout")  # RunFinished.status values
+
+_BASE_FIELDS = ("run_id", "seq", "t")
+_PLAN_KEYS = (("index", int), ("cost", float), ("actions", list[str]), ("streams", list[str]))
+
+
+@dataclass(frozen=True)
+class _EventBase:
+    """Fields every event has; not an event itself (it has no ``type``)."""
+
+    type: ClassVar[str]
+
+    run_id: str
+    seq: int  # position in the run's event stream, from 0
+    t: float  # seconds since the run started
+
+    def __post_init__(self) -> None:
+        for name, check, is_float in _field_checks(type(self)):
+            value = getattr(self, name)
+            error = check(value)
+            if error is not None:
+                raise ValueError(f"{self.type}.{name}{error}")
+            if is_float and value is not None and type(value) is not float:
+                object.__setattr__(self, name, float(value))  # 1 and 1.0 must round-trip alike
+        if not self.run_id:
+            self._fail("run_id", "must not be empty")
+        if self.seq < 0:
+            self._fail("seq", f"must be >= 0, got {self.seq}")
+        if self.t < 0:
+            self._fail("t", f"must be >= 0, got {self.t}")
+        self._validate()
+
+    def _validate(self) -> None:
+        """Invariants of one event class beyond the field types."""
+
+    def _fail(self, field: str, message: str) -> NoReturn:
+        raise ValueError(f"{self.type}.{field}: {message}")
+
+    def _non_negative(self, *names: str) -> None:
+        for name in names:
+            value = getattr(self, name)
+            if value is not None and value < 0:
+                self._fail(name, f"must be >= 0, got {value}")
+
+
+@dataclass(frozen=True)
+class RunStarted(_EventBase):
+    type: ClassVar[str] = "run_started"
+
+    scene: str
+    seed: int
+    planner: str
+    config: dict[str, Any]  # the run's full configuration, enough to reproduce it
+
+
+@dataclass(frozen=True)
+class AbstractPlansFound(_EventBase):
+    type: ClassVar[str] = "abstract_plans_found"
+
+    plans: list[dict[str, Any]]  # {"index": int, "cost": float, "actions": [str], "streams": [str]}
+    seconds: float  # wall seconds of abstract planning, top-k included
+
+    def _validate(self) -> None:
+        self._non_negative("seconds")
+        for i, plan in enumerate(self.plans):
+            for key, hint in _PLAN_KEYS:
+                if key not in plan:
+                    self._fail(f"plans[{i}]", f"missing key {key!r}")
+                _check_value(plan[key], hint, f"{self.type}.plans[{i}].{key}")
+
+
+@dataclass(frozen=True)
+class NodeAdded(_EventBase):
+    type: ClassVar[str] = "node_added"
+
+    node_id: int
+    parent_id: int | None  # None for the root only
+    plan_index: int  # which abstract plan the node belongs to; -1 for the root
+    depth: int  # 0 root and stream plans, d >= 1 a result of the plan's d-th stream
+    stream: str | None  # the stream queried to make this node; None for the root and plan nodes
+    success: bool
+    outputs: list[str]  # names of the objects the query bound
+    label: str  # short text for the dashboard
+
+    def _validate(self) -> None:
+        self._non_negative("node_id", "parent_id")
+        if self.depth < 0:
+            self._fail("depth", f"must be >= 0, got {self.depth}")
+        if self.plan_index < -1:
+            self._fail("plan_index", f"must be >= -1, got {self.plan_index}")
+        if self.parent_id is None and self.stream is not None:
+            self._fail("stream", "the root (parent_id None) has no stream")
+        if self.depth == 0 and self.stream is not None:
+            self._fail("stream", f"a node at depth {self.depth} has no stream")
+        if self.depth >= 1 and self.stream is None:
+            self._fail("stream", f"a node at depth {self.depth} must name its stream")
+
+
+@dataclass(frozen=True)
+class NodeVisited(_EventBase):
+    type: ClassVar[str] = "node_visited"
+
+    node_id: int
+    visits: int  # visit count after this back-up
+    value: float  # node value after this back-up
+
+    def _validate(self) -> None:
+        self._non_negative("node_id", "visits")
+
+
+@dataclass(frozen=True)
+class StreamQueried(_EventBase):
+    type: ClassVar[str] = "stream_queried"
+
+    node_id: int  # the node whose expansion or simulation made the query
+    stream: str
+    input_names: list[str]
+    inputs: list[Any]  # JSON-encoded input values, one per input name
+    success: bool
+    wall_s: float
+    cpu_s: float
+    execution_s: float  # seconds to execute what the query produced; 0 if nothing moves
+    error: str | None  # why the sampler failed (raised, malformed output); None otherwise
+
+    def _validate(self) -> None:
+        self._non_negative("node_id", "wall_s", "cpu_s", "execution_s")
+        if not self.stream:
+            self._fail("stream", "must not be empty")
+        if len(self.inputs) != len(self.input_names):
+            self._fail(
+                "inputs", f"{len(self.inputs)} values for {len(self.input_names)} input names"
+            )
+        if self.success and self.error is not None:
+            self._fail("error", "a successful query has no error")
+
+
+@dataclass(frozen=True)
+class ModelPrediction(_EventBase):
+    """The learned models' view of a node: Eq. 1-3 per stream and the Eq. 4 cost to go."""
+
+    type: ClassVar[str] = "model_prediction"
+
+    node_id: int
+    p_s: float  # probability that the node's next query succeeds
+    r_s: float  # seconds of a successful query
+    r_f: float  # seconds of a failed query
+    r_m: float  # seconds to execute the produced trajectory
+    q: float  # expected remaining cost (seconds) of the node's stream plan; finite
+
+    def _validate(self) -> None:
+        self._non_negative("node_id", "r_s", "r_f", "r_m")
+        if not 0.0 <= self.p_s <= 1.0:
+            self._fail("p_s", f"must be a probability, got {self.p_s}")
+
+
+@dataclass(frozen=True)
+class SolutionFound(_EventBase):
+    type: ClassVar[str] = "solution_found"
+
+    node_id: int  # the leaf that binds the whole plan
+    plan_index: int
+    planning_s: float
+    execution_s: float
+    oracle_s: float
+
+    def _validate(self) -> None:
+        self._non_negative("node_id", "plan_index", "planning_s", "execution_s", "oracle_s")
+
+
+@dataclass(frozen=True)
+class RunFinished(_EventBase):
+    type: ClassVar[str] = "run_finished"
+
+    status: str  # one of FINISH_STATUSES
+    planning_s: float
+    execution_s: float | None  # None unless solved
+    oracle_s: float | None
+    queries: int  # stream queries made
+    message: str
+
+    def _validate(self) -> None:
+        if self.status not in FINISH_STATUSES:
+            self._fail(
+                "status", f"unknown status {self.status!r} (known: {', '.join(FINISH_STATUSES)})"
+            )
+        self._non_negative("planning_s", "execution_s", "oracle_s", "queries")
+
+
+@dataclass(frozen=True)
+class RunFailed(_EventBase):
+    """The run stopped on an error (an exception in the planner, not a failed search)."""
+
+    type: ClassVar[str] = "run_failed"
+
+    error: str
+
+
+@dataclass(frozen=True)
+class RunCancelled(_EventBase):
+    type: ClassVar[str] = "run_cancelled"
+
+    reason: str
+
+
+Event: TypeAlias = (
+    RunStarted
+    | AbstractPlansFound
+    | NodeAdded
+    | NodeVisited
+    | StreamQueried
+    | ModelPrediction
+    | SolutionFound
+    | RunFinished
+    | RunFailed
+    | RunCancelled
+)
+
+EVENT_TYPES: dict[str, type[Event]] = {cls.type: cls for cls in get_args(Event)}
+
+TERMINAL_TYPES = frozenset(c.type for c in (RunFinished, RunFailed, RunCancelled))  # run's last
+
+EventT = TypeVar(
+    "EventT",
+    RunStarted,
+    AbstractPlansFound,
+    NodeAdded,
+    NodeVisited,
+    StreamQueried,
+    ModelPrediction,
+    SolutionFound,
+    RunFinished,
+    RunFailed,
+    RunCancelled,
+)
+
+
+# --- field checks --------------------------------------------------------------------------
+
+
+# A check returns None when the value fits, else where it went wrong and why ("[0]: ...").
+_Check = Callable[[Any], str | None]
+
+_CHECKS: dict[type[_EventBase], tuple[tuple[str, _Check, bool], ...]] = {}
+
+
+def _field_checks(cls: type[_EventBase]) -> tuple[tuple[str, _Check, bool], ...]:
+    """(field name, check, is a float field) of an event class, compiled once."""
+    checks = _CHECKS.get(cls)
+    if checks is None:
+        hints = get_type_hints(cls)
+        checks = _CHECKS[cls] = tuple(
+            (f.name, _compile(hints[f.name]), _is_float_hint(hints[f.name]))
+            for f in dataclasses.fields(cls)
+        )
+    return checks
+
+
+def _check_value(value: Any, hint: Any, where: str) -> None:
+    """Raise ValueError unless ``value`` fits the annotation ``hint`` and is JSON-friendly."""
+    error = _compile(hint)(value)
+    if error is not None:
+        raise ValueError(f"{where}{error}")
+
+
+def _is_float_hint(hint: Any) -> bool:
+    return hint is float or (_is_union(hint) and float in get_args(hint))
+
+
+def _is_union(hint: Any) -> bool:
+    return get_origin(hint) in (Union, types.UnionType)
+
+
+def _compile(hint: Any) -> _Check:
+    """The check for values annotated ``hint`` (the annotations events use)."""
+    if hint is Any:
+        return _check_json
+    if _is_union(hint):
+        (inner,) = [a for a in get_args(hint) if a is not type(None)]
+        check_inner = _compile(inner)
+        return lambda v: None if v is None else check_inner(v)
+    if get_origin(hint) is list:
+        check_item = _compile(get_args(hint)[0])
+
+        def check_list(v: Any) -> str | None:
+            if type(v) is not list:
+                return f": expected a list, got {type(v).__name__}"
+            for i, x in enumerate(v):
+                error = check_item(x)
+                if error is not None:
+                    return f"[{i}]{error}"
+            return None
+
+        return check_list
+    if get_origin(hint) is dict:
+        check_value = _compile(get_args(hint)[1])
+
+        def check_dict(v: Any) -> str | None:
+            if type(v) is not dict:
+                return f": expected a dict, got {type(v).__name__}"
+            return _check_items(v, check_value)
+
+        return check_dict
+    if hint is float:
+        return _check_number
+    if hint in (int, str, bool):
+        return lambda v: (
+            None if type(v) is hint else f": expected {hint.__name__}, got {type(v).__name__}"
+        )
+    raise TypeError(f"unsupported event field annotation {hint!r}")
+
+
+def _check_number(v: Any) -> str | None:
+    """A float field takes any real number but bool (numpy's included; stored as a float)."""
+    if type(v) is float or type(v) is int:
+        return None if math.isfinite(v) else f": must be finite, got {v}"
+    if isinstance(v, numbers.Real) and not isinstance(v, bool):
+        return None if math.isfinite(v) else f": must be finite, got {v}"
+    return f": expected a number, got {type(v).__name__}"
+
+
+def _check_items(v: dict[Any, Any], check_value: _Check) -> str | None:
+    for k, x in v.items():
+        if type(k) is not str:
+            return f": keys must be str, got {k!r}"
+        error = check_value(x)
+        if error is not None:
+            return f"[{k!r}]{error}"
+    return None
+
+
+def _check_json(v: Any) -> str | None:
+    """Any JSON-friendly value: str, int, finite float, bool, None, lists and str-keyed dicts."""
+    kind = type(v)
+    if kind is str or kind is int or kind is bool or v is None:
+        return None
+    if isinstance(v, float):
+        return None if math.isfinite(v) else f": must be finite, got {v}"
+    if kind is list:
+        for i, x in enumerate(v):
+            error = _check_json(x)
+            if error is not None:
+                return f"[{i}]{error}"
+        return None
+    if kind is dict:
+        return _check_items(v, _check_json)
+    return f": {kind.__name__} is not JSON-friendly"
+
+
+# --- (de)serialisation ---------------------------------------------------------------------
+
+
+_NAMES: dict[type[_EventBase], tuple[str, ...]] = {}
+
+_encode = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
+
+
+def _names(cls: type[_EventBase]) -> tuple[str, ...]:
+    names = _NAMES.get(cls)
+    if names is None:
+        names = _NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
+    return names
+
+
+def event_payload(event: Event) -> dict[str, Any]:
+    """The fields of ``event`` other than run_id, seq and t (shares values with the event)."""
+    return {n: getattr(event, n) for n in _names(type(event))[len(_BASE_FIELDS) :]}
+
+
+def event_to_dict(event: Event) -> dict[str, Any]:
+    """All fields plus ``"type"``; a deep copy, safe to change."""
+    return {"type": event.type, **dataclasses.asdict(event)}
+
+
+def event_to_json(event: Event) -> str:
+    """Compact JSON of :func:`event_to_dict` (what the websocket sends)."""
+    data: dict[str, Any] = {"type": event.type}
+    for n in _names(type(event)):
+        data[n] = getattr(event, n)
+    return _encode(data)
+
+
+def event_from_dict(data: dict[str, Any]) -> Event:
+    """Inverse of :func:`event_to_dict`; ValueError names the unknown type or the bad field."""
+    if not isinstance(data, dict):
+        raise ValueError(f"an event is a JSON object, got {type(data).__name__}")
+    name = data.get("type")
+    cls = EVENT_TYPES.get(name) if isinstance(name, str) else None
+    if cls is None:
+        raise ValueError(f"unknown event type {name!r} (known: {', '.join(EVENT_TYPES)})")
+    names = _names(cls)
+    missing = [n for n in names if n not in data]
+    if missing:
+        raise ValueError(f"event {name!r} is missing field(s): {', '.join(missing)}")
+    extra = sorted(set(data) - set(names) - {"type"})
+    if extra:
+        raise ValueError(f"event {name!r} has unknown field(s): {', '.join(extra)}")
+    return cls(**{n: data[n] for n in names})
+
+
+def event_from_json(text: str | bytes) -> Event:
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"an event is not valid JSON: {exc}") from exc
+    return event_from_dict(data)
+
+
+# --- sinks ---------------------------------------------------------------------------------
+
+
+class EventSink(Protocol):
+    """Receives a run's events in ``seq`` order; ``close`` when the run is over."""
+
+    def emit(self, event: Event) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class ListSink:
+    """Keeps every event in :attr:`events` (tests, small tools)."""
+
+    def __init__(self) -> None:
+        self.events: list[Event] = []
+        self.closed = False
+
+    def emit(self, event: Event) -> None:
+        self.events.append(event)
+
+    def close(self) -> None:
+        self.closed = True
+
+
+class FanOutSink:
+    """Forwards each event to several sinks. A sink that raises is logged, closed and dropped:
+    a broken listener never stops the planner."""
+
+    def __init__(self, *sinks: EventSink) -> None:
+        self._sinks: list[EventSink] = list(sinks)
+
+    @property
+    def sinks(self) -> tuple[EventSink, ...]:
+        """The sinks still receiving events."""
+        return tuple(self._sinks)
+
+    def emit(self, event: Event) -> None:
+        broken: list[EventSink] = []
+        for sink in self._sinks:
+            try:
+                sink.emit(event)
+            except Exception:
+                log.exception(
+                    "event sink %r failed on %s #%d; dropping it", sink, event.type, event.seq
+                )
+                broken.append(sink)
+        for sink in broken:
+            self._sinks.remove(sink)
+            self._close(sink)
+
+    def close(self) -> None:
+        sinks, self._sinks = self._sinks, []
+        for sink in sinks:
+            self._close(sink)
+
+    @staticmethod
+    def _close(sink: EventSink) -> None:
+        try:
+            sink.close()
+        except Exception:
+            log.exception("event sink %r failed to close", sink)
+
+
+class Emitter:
+    """Stamps events of one run with ``run_id``, the next ``seq`` and ``t``, then emits them.
+
+    ``t`` is seconds since the emitter was made, read from ``clock`` (default
+    :func:`time.perf_counter`) and never decreasing. Thread-safe: events reach the sink in
+    ``seq`` order. Sink errors propagate; wrap sinks in :class:`FanOutSink` to isolate them.
+    """
+
+    def __init__(
+        self, run_id: str, sink: EventSink, clock: Callable[[], float] | None = None
+    ) -> None:
+        if not run_id:
+            raise ValueError("run_id must not be empty")
+        self.run_id = run_id
+        self.sink = sink
+        self._clock = clock or time.perf_counter
+        self._start = self._clock()
+        self._seq = 0
+        self._t = 0.0
+        self._lock = threading.Lock()
+
+    @property
+    def next_seq(self) -> int:
+        return self._seq
+
+    def elapsed(self) -> float:
+        """Seconds since the emitter was made (the ``t`` an event made now would get)."""
+        return max(self._clock() - self._start, self._t)
+
+    def emit(self, cls: type[EventT], **fields: Any) -> EventT:
+        with self._lock:
+            self._t = self.elapsed()
+            event = cls(run_id=self.run_id, seq=self._seq, t=self._t, **fields)
+            self._seq += 1
+            self.sink.emit(event)
+        return event

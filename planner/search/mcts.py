@@ -1,0 +1,318 @@
+"""The tree search over stream bindings: selection, expansion, simulation, back-propagation.
+
+The loop is here; what it selects is decided by a :class:`Policy` (the eTAMP baseline now, the
+learned policy later). Every step is reported as an event (:mod:`planner.events`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
+
+from planner.abstract.skeleton import AbstractPlan
+from planner.events import Emitter, NodeAdded, NodeVisited, SolutionFound, StreamQueried
+from planner.pddl.structs import Atom
+from planner.search.baseline import (
+    BaselineConfig,
+    failure_value,
+    should_widen,
+    success_value,
+    ucb,
+)
+from planner.search.tree import ROOT, Node, Tree
+from planner.streams.adapters import StreamContext
+from planner.streams.runtime import QueryResult, StreamRuntime
+
+log = logging.getLogger(__name__)
+
+Status = Literal["solved", "timeout", "failed", "cancelled"]
+
+
+class Policy(Protocol):
+    """What the loop asks at each step; pure decisions over the tree's numbers."""
+
+    def add_plan(self, tree: Tree, plans_added: int, plans_total: int) -> bool:
+        """At the root: open the next stream plan (True) or descend into an open one."""
+        ...
+
+    def pick_plan(self, tree: Tree) -> Node:
+        """At the root: which open stream plan to descend into."""
+        ...
+
+    def expand(self, tree: Tree, node: Node) -> bool:
+        """Inside a plan: query the node's next stream again (True) or descend."""
+        ...
+
+    def pick_child(self, tree: Tree, node: Node) -> Node:
+        """Inside a plan: which successful child to descend into."""
+        ...
+
+    def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
+        """The value of a failed query or a fully bound plan."""
+        ...
+
+
+@dataclass(frozen=True)
+class BaselinePolicy:
+    """eTAMP's progressive-widening UCT (Ren et al.)."""
+
+    config: BaselineConfig = field(default_factory=BaselineConfig)
+
+    def add_plan(self, tree: Tree, plans_added: int, plans_total: int) -> bool:
+        if plans_added >= plans_total:
+            return False
+        root = tree[ROOT]
+        return plans_added == 0 or root.visits > self.config.root_widen_k * plans_added**2
+
+    def pick_plan(self, tree: Tree) -> Node:
+        root = tree[ROOT]
+        return max(
+            (tree[c] for c in root.children),
+            key=lambda n: ucb(n.value, n.visits, root.visits, self.config.c_plan),
+        )
+
+    def expand(self, tree: Tree, node: Node) -> bool:
+        live = tree.live_children(node.id)
+        return not live or should_widen(node.visits, len(node.children), self.config.widen_k)
+
+    def pick_child(self, tree: Tree, node: Node) -> Node:
+        return max(
+            tree.live_children(node.id),
+            key=lambda n: ucb(n.value, n.visits, node.visits, self.config.c_node),
+        )
+
+    def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
+        depth = len(plan.stream_plan)
+        if leaf.success:
+            return success_value([1.0] * len(plan.actions), self.config)
+        return failure_value(leaf.depth - 1, depth, self.config)
+
+
+@dataclass
+class SearchResult:
+    status: Status
+    node_id: int | None  # the fully bound node, when solved
+    plan_index: int | None
+    values: dict[str, Any]  # optimistic object -> value along the solution branch
+    queries: list[tuple[int, QueryResult]]  # (node made by the query, result), in order
+    iterations: int
+    seconds: float
+    oracle_query_s: float  # wall seconds of the successful queries on the solution branch
+
+    @property
+    def solved(self) -> bool:
+        return self.status == "solved"
+
+
+class TreeSearch:
+    """One search over the stream plans of ``skeletons``."""
+
+    def __init__(
+        self,
+        skeletons: Sequence[AbstractPlan],
+        states: Sequence[Sequence[frozenset[Atom]]],
+        initial_values: Mapping[str, Any],
+        runtime: StreamRuntime,
+        policy: Policy,
+        *,
+        emitter: Emitter | None = None,
+        encode: Callable[[Any], Any] = repr,
+        progress: Callable[[str], None] | None = None,
+        should_stop: Callable[[], bool] | None = None,
+    ) -> None:
+        if not skeletons:
+            raise ValueError("the search needs at least one stream plan")
+        if len(states) != len(skeletons):
+            raise ValueError("one list of stream contexts per skeleton is needed")
+        self.skeletons = list(skeletons)
+        self.states = [list(s) for s in states]
+        self.initial_values = dict(initial_values)
+        self.runtime = runtime
+        self.policy = policy
+        self.emitter = emitter
+        self.encode = encode
+        self.progress = progress
+        self.should_stop = should_stop
+        self.tree = Tree()
+        self.queries: list[tuple[int, QueryResult]] = []
+        self.deepest = 0.0  # largest share of a stream plan bound so far
+        self._last_progress = 0.0
+
+    # --- events ------------------------------------------------------------------------------
+
+    def _label(self, node: Node) -> str:
+        if node.parent == ROOT:
+            plan = self.skeletons[node.plan_index]
+            return f"plan {node.plan_index} ({len(plan.stream_plan)} streams)"
+        inst = self.skeletons[node.plan_index].stream_plan[node.depth - 1]
+        return f"{inst}" + ("" if node.success else " (failed)")
+
+    def _added(self, node: Node) -> None:
+        if self.emitter is None:
+            return
+        stream = None
+        if node.parent != ROOT and node.parent is not None:
+            stream = self.skeletons[node.plan_index].stream_plan[node.depth - 1].stream
+        self.emitter.emit(
+            NodeAdded,
+            node_id=node.id,
+            parent_id=node.parent,
+            plan_index=node.plan_index,
+            depth=node.depth,
+            stream=stream,
+            success=node.success,
+            outputs=[str(self.encode(v)) for v in node.outputs.values()],
+            label=self._label(node),
+        )
+
+    # --- steps -------------------------------------------------------------------------------
+
+    def _open_plan(self, index: int) -> Node:
+        node = self.tree.add(ROOT, plan_index=index, depth=0, success=True)
+        self._added(node)
+        return node
+
+    def _query(self, node: Node) -> Node:
+        """Query the next stream of ``node``'s plan once; the result becomes a child."""
+        plan = self.skeletons[node.plan_index]
+        inst = plan.stream_plan[node.depth]
+        values = {**self.initial_values, **self.tree.bindings(node.id)}
+        inputs = tuple(values[name] for name in inst.inputs)
+        context = StreamContext(self.states[node.plan_index][node.depth], values)
+        result = self.runtime.query(
+            inst.stream, inputs, key=(node.id, inst.stream), context=context
+        )
+        outputs = (
+            dict(zip(inst.outputs, result.outputs, strict=True))
+            if result.outputs is not None
+            else {}
+        )
+        child = self.tree.add(
+            node.id,
+            plan_index=node.plan_index,
+            depth=node.depth + 1,
+            success=result.success,
+            outputs=outputs,
+            query_wall_s=result.wall_s,
+        )
+        self.queries.append((child.id, result))
+        if result.success:
+            self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))
+        if self.emitter is not None:
+            self.emitter.emit(
+                StreamQueried,
+                node_id=child.id,
+                stream=inst.stream,
+                input_names=list(inst.inputs),
+                inputs=[self.encode(v) for v in inputs],
+                success=result.success,
+                wall_s=result.wall_s,
+                cpu_s=result.cpu_s,
+                execution_s=result.execution_s,
+                error=result.error,
+            )
+        self._added(child)
+        return child
+
+    def _complete(self, node: Node) -> bool:
+        return node.success and node.depth == len(self.skeletons[node.plan_index].stream_plan)
+
+    def _backup(self, leaf: Node) -> None:
+        plan = self.skeletons[leaf.plan_index]
+        leaf.value = self.policy.leaf_value(leaf, plan)
+        current: int | None = leaf.id
+        while current is not None:
+            node = self.tree[current]
+            node.visits += 1
+            if node.id != leaf.id:
+                visited = [self.tree[c].value for c in node.children if self.tree[c].visits]
+                node.value = max(visited) if visited else 0.0
+            if self.emitter is not None:
+                self.emitter.emit(
+                    NodeVisited, node_id=node.id, visits=node.visits, value=node.value
+                )
+            current = node.parent
+
+    def _say(self, start: float) -> None:
+        if self.progress is None:
+            return
+        now = time.perf_counter()
+        if now - self._last_progress < 0.2:
+            return
+        self._last_progress = now
+        self.progress(
+            f"queries {len(self.queries)}, nodes {len(self.tree)}, deepest binding "
+            f"{self.deepest:.0%}, {now - start:.0f} s"
+        )
+
+    # --- the loop ----------------------------------------------------------------------------
+
+    def run(self, *, deadline: float, start: float | None = None) -> SearchResult:
+        """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, or stop."""
+        start = time.perf_counter() if start is None else start
+        plans_added = 0
+        iterations = 0
+        status: Status = "timeout"
+        solution: Node | None = None
+        while True:
+            if time.perf_counter() >= deadline:
+                status = "timeout"
+                break
+            if self.should_stop is not None and self.should_stop():
+                status = "cancelled"
+                break
+            iterations += 1
+            tree = self.tree
+            if self.policy.add_plan(tree, plans_added, len(self.skeletons)):
+                node = self._open_plan(plans_added)
+                plans_added += 1
+            else:
+                node = self.policy.pick_plan(tree)
+            leaf: Node | None = None
+            while leaf is None:
+                if self._complete(node):
+                    leaf = node
+                elif self.policy.expand(tree, node):
+                    child = self._query(node)
+                    while child.success and not self._complete(child):
+                        if time.perf_counter() >= deadline:
+                            break
+                        child = self._query(child)  # simulation: bind what follows once
+                    leaf = child
+                else:
+                    node = self.policy.pick_child(tree, node)
+            self._backup(leaf)
+            self._say(start)
+            if self._complete(leaf):
+                solution = leaf
+                status = "solved"
+                break
+        seconds = time.perf_counter() - start
+        if solution is None:
+            return SearchResult(status, None, None, {}, self.queries, iterations, seconds, 0.0)
+        branch = set(self.tree.path(solution.id))
+        oracle = sum(self.tree[i].query_wall_s for i in branch)
+        execution = sum(r.execution_s for node_id, r in self.queries if node_id in branch)
+        values = self.tree.bindings(solution.id)
+        if self.emitter is not None:
+            self.emitter.emit(
+                SolutionFound,
+                node_id=solution.id,
+                plan_index=solution.plan_index,
+                planning_s=seconds,
+                execution_s=execution,
+                oracle_s=oracle,
+            )
+        return SearchResult(
+            "solved",
+            solution.id,
+            solution.plan_index,
+            values,
+            self.queries,
+            iterations,
+            seconds,
+            oracle,
+        )

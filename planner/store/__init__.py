@@ -1,0 +1,21 @@
+"""The record of runs: every event and every stream query, in SQLite through SQLAlchemy."""
+
+from planner.store.db import (
+    FINAL_STATUSES,
+    RUN_STATUSES,
+    QueryRecord,
+    RunRecord,
+    RunStore,
+    StoreSink,
+    default_db_path,
+)
+
+__all__ = [
+    "FINAL_STATUSES",
+    "RUN_STATUSES",
+    "QueryRecord",
+    "RunRecord",
+    "RunStore",
+    "StoreSink",
+    "default_db_path",
+]

@@ -1,0 +1,581 @@
+"""Runs, their events and every stream query, in SQLite (default) or any SQLAlchemy database.
+
+Three tables: ``runs`` (one row per run: what was asked, how it ended), ``events`` (every event
+of every run, keyed by ``(run_id, seq)``, the payload as JSON) and ``stream_queries`` (one row per
+:class:`~planner.events.StreamQueried` event, flattened for training and statistics).
+:class:`StoreSink` is the :class:`~planner.events.EventSink` that fills the last two in batches.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import threading
+import time
+import uuid
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import (
+    URL,
+    Connection,
+    DateTime,
+    Engine,
+    ForeignKey,
+    Index,
+    String,
+    Text,
+    create_engine,
+    event,
+    func,
+    insert,
+    make_url,
+    select,
+    update,
+)
+from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
+from sqlalchemy.pool import StaticPool
+
+from planner.events import (
+    TERMINAL_TYPES,
+    Event,
+    StreamQueried,
+    event_from_dict,
+    event_payload,
+)
+
+log = logging.getLogger(__name__)
+
+RUN_STATUSES = ("running", "solved", "failed", "timeout", "cancelled", "interrupted")
+FINAL_STATUSES = RUN_STATUSES[1:]  # what finish_run accepts
+
+
+_dumps = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
+
+
+def _utc(value: datetime) -> datetime:
+    """SQLite hands datetimes back naive; they were written in UTC."""
+    return value if value.tzinfo is not None else value.replace(tzinfo=UTC)
+
+
+# --- schema ----------------------------------------------------------------------------------
+
+
+class Base(DeclarativeBase):
+    pass
+
+
+class RunRow(Base):
+    __tablename__ = "runs"
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)  # uuid4 hex
+    scene: Mapped[str] = mapped_column(Text)  # a scene name or a path to a scene file
+    seed: Mapped[int]
+    planner: Mapped[str] = mapped_column(String(100))
+    config: Mapped[str] = mapped_column(Text)  # JSON
+    status: Mapped[str] = mapped_column(String(16))  # one of RUN_STATUSES
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    planning_s: Mapped[float | None]
+    execution_s: Mapped[float | None]
+    oracle_s: Mapped[float | None]
+    queries: Mapped[int] = mapped_column(default=0)
+    message: Mapped[str] = mapped_column(Text, default="")
+    plan: Mapped[str | None] = mapped_column(Text)  # JSON of the bound plan file when solved
+
+
+class EventRow(Base):
+    """The primary key (run_id, seq) is the index that replay and pagination read through."""
+
+    __tablename__ = "events"
+
+    run_id: Mapped[str] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True)
+    seq: Mapped[int] = mapped_column(primary_key=True)
+    t: Mapped[float]
+    type: Mapped[str] = mapped_column(String(32))
+    payload: Mapped[str] = mapped_column(Text)  # JSON of the fields other than run_id, seq, t
+
+
+class QueryRow(Base):
+    __tablename__ = "stream_queries"
+    __table_args__ = (
+        Index("ix_stream_queries_stream", "stream"),
+        Index("ix_stream_queries_run_id", "run_id"),
+    )
+
+    id: Mapped[int] = mapped_column(primary_key=True, autoincrement=True)
+    run_id: Mapped[str] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    node_id: Mapped[int]
+    seq: Mapped[int]  # the StreamQueried event's seq
+    stream: Mapped[str] = mapped_column(String(200))
+    input_names: Mapped[str] = mapped_column(Text)  # JSON list
+    inputs: Mapped[str] = mapped_column(Text)  # JSON list of encoded values
+    success: Mapped[bool]
+    wall_s: Mapped[float]
+    cpu_s: Mapped[float]
+    execution_s: Mapped[float]
+    error: Mapped[str | None] = mapped_column(Text)
+
+
+# --- records ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    id: str
+    scene: str
+    seed: int
+    planner: str
+    config: dict[str, Any]
+    status: str  # one of RUN_STATUSES
+    created_at: datetime  # UTC
+    finished_at: datetime | None
+    planning_s: float | None
+    execution_s: float | None
+    oracle_s: float | None
+    queries: int
+    message: str
+    plan: dict[str, Any] | None  # the bound plan file when solved
+
+    @classmethod
+    def from_row(cls, row: RunRow) -> RunRecord:
+        return cls(
+            id=row.id,
+            scene=row.scene,
+            seed=row.seed,
+            planner=row.planner,
+            config=json.loads(row.config),
+            status=row.status,
+            created_at=_utc(row.created_at),
+            finished_at=_utc(row.finished_at) if row.finished_at is not None else None,
+            planning_s=row.planning_s,
+            execution_s=row.execution_s,
+            oracle_s=row.oracle_s,
+            queries=row.queries,
+            message=row.message,
+            plan=json.loads(row.plan) if row.plan is not None else None,
+        )
+
+
+@dataclass(frozen=True)
+class QueryRecord:
+    """One stream query, as training and statistics read it."""
+
+    id: int
+    run_id: str
+    node_id: int
+    seq: int
+    stream: str
+    input_names: list[str]
+    inputs: list[Any]
+    success: bool
+    wall_s: float
+    cpu_s: float
+    execution_s: float
+    error: str | None
+
+    @classmethod
+    def from_row(cls, row: QueryRow) -> QueryRecord:
+        return cls(
+            id=row.id,
+            run_id=row.run_id,
+            node_id=row.node_id,
+            seq=row.seq,
+            stream=row.stream,
+            input_names=json.loads(row.input_names),
+            inputs=json.loads(row.inputs),
+            success=row.success,
+            wall_s=row.wall_s,
+            cpu_s=row.cpu_s,
+            execution_s=row.execution_s,
+            error=row.error,
+        )
+
+
+# --- the store -------------------------------------------------------------------------------
+
+
+def default_db_path() -> Path:
+    """``$XDG_DATA_HOME/guided-tamp/runs.db``, else ``~/.local/share/guided-tamp/runs.db``."""
+    xdg = os.environ.get("XDG_DATA_HOME", "")
+    base = Path(xdg) if xdg and Path(xdg).is_absolute() else Path.home() / ".local" / "share"
+    return base / "guided-tamp" / "runs.db"
+
+
+def _engine_for(url_or_path: str | Path | URL) -> Engine:
+    if isinstance(url_or_path, URL) or (isinstance(url_or_path, str) and "://" in url_or_path):
+        url = make_url(url_or_path)
+    else:
+        path = Path(url_or_path).expanduser().resolve()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        url = URL.create("sqlite", database=str(path))
+    if url.get_backend_name() != "sqlite":
+        return create_engine(url, pool_pre_ping=True)
+    in_memory = url.database in (None, "", ":memory:")
+    if in_memory:  # one shared connection, or each thread would see its own empty database
+        engine = create_engine(url, poolclass=StaticPool, connect_args={"check_same_thread": False})
+    else:
+        engine = create_engine(url, connect_args={"timeout": 30.0})  # wait out other writers
+
+    @event.listens_for(engine, "connect")
+    def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
+        cursor = dbapi_connection.cursor()
+        if not in_memory:
+            cursor.execute("PRAGMA journal_mode=WAL")  # readers never block the writer
+            cursor.execute("PRAGMA synchronous=NORMAL")  # safe with WAL, no fsync per commit
+        cursor.execute("PRAGMA foreign_keys=ON")
+        cursor.close()
+
+    return engine
+
+
+class RunStore:
+    """The record of every run. ``RunStore(path)`` opens (creating if needed) a SQLite file;
+    a URL (``postgresql+psycopg://...``) opens any database SQLAlchemy speaks.
+
+    Thread-safe: each call takes its own connection from the engine's pool.
+    """
+
+    def __init__(self, url_or_path: str | Path | URL) -> None:
+        self.engine = _engine_for(url_or_path)
+        Base.metadata.create_all(self.engine)
+        log.debug("run store at %s", self.engine.url.render_as_string(hide_password=True))
+
+    def __enter__(self) -> RunStore:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+    # runs
+
+    def create_run(self, scene: str, seed: int, planner: str, config: dict[str, Any]) -> str:
+        """Record a new run as ``running``; returns its id."""
+        try:
+            config_json = _dumps(config)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"run config is not JSON-friendly: {exc}") from exc
+        run_id = uuid.uuid4().hex
+        with self.engine.begin() as conn:
+            conn.execute(
+                insert(RunRow).values(
+                    id=run_id,
+                    scene=scene,
+                    seed=seed,
+                    planner=planner,
+                    config=config_json,
+                    status="running",
+                    created_at=datetime.now(UTC),
+                    queries=0,
+                    message="",
+                )
+            )
+        log.debug("created run %s (%s, seed %d, %s)", run_id, scene, seed, planner)
+        return run_id
+
+    def finish_run(
+        self,
+        run_id: str,
+        status: str,
+        *,
+        planning_s: float | None = None,
+        execution_s: float | None = None,
+        oracle_s: float | None = None,
+        queries: int = 0,
+        message: str = "",
+        plan: dict[str, Any] | None = None,
+    ) -> RunRecord:
+        """Record how a running run ended; a run is finished once."""
+        if status not in FINAL_STATUSES:
+            raise ValueError(
+                f"unknown final status {status!r} (known: {', '.join(FINAL_STATUSES)})"
+            )
+        if queries < 0:
+            raise ValueError(f"queries must be >= 0, got {queries}")
+        with self.engine.begin() as conn:
+            current = conn.execute(select(RunRow.status).where(RunRow.id == run_id)).scalar()
+            if current is None:
+                raise _unknown(run_id)
+            if current != "running":
+                raise ValueError(f"run {run_id} already finished with status {current!r}")
+            conn.execute(
+                update(RunRow)
+                .where(RunRow.id == run_id)
+                .values(
+                    status=status,
+                    finished_at=datetime.now(UTC),
+                    planning_s=planning_s,
+                    execution_s=execution_s,
+                    oracle_s=oracle_s,
+                    queries=queries,
+                    message=message,
+                    plan=_dumps(plan) if plan is not None else None,
+                )
+            )
+        return self.get_run(run_id)
+
+    def get_run(self, run_id: str) -> RunRecord:
+        with Session(self.engine) as session:
+            row = session.get(RunRow, run_id)
+            if row is None:
+                raise _unknown(run_id)
+            return RunRecord.from_row(row)
+
+    def list_runs(
+        self,
+        *,
+        status: str | None = None,
+        scene: str | None = None,
+        planner: str | None = None,
+        limit: int = 50,
+        offset: int = 0,
+    ) -> list[RunRecord]:
+        """Runs newest first, optionally filtered."""
+        if status is not None and status not in RUN_STATUSES:
+            raise ValueError(f"unknown status {status!r} (known: {', '.join(RUN_STATUSES)})")
+        if limit < 0 or offset < 0:
+            raise ValueError("limit and offset must be >= 0")
+        query = select(RunRow)
+        if status is not None:
+            query = query.where(RunRow.status == status)
+        if scene is not None:
+            query = query.where(RunRow.scene == scene)
+        if planner is not None:
+            query = query.where(RunRow.planner == planner)
+        query = query.order_by(RunRow.created_at.desc(), RunRow.id).limit(limit).offset(offset)
+        with Session(self.engine) as session:
+            return [RunRecord.from_row(r) for r in session.scalars(query)]
+
+    def mark_interrupted(self) -> int:
+        """Runs still ``running`` (their process died) become ``interrupted``; returns how many.
+        Call it when the server starts, before any run is launched."""
+        with self.engine.begin() as conn:
+            result = conn.execute(
+                update(RunRow)
+                .where(RunRow.status == "running")
+                .values(
+                    status="interrupted",
+                    finished_at=datetime.now(UTC),
+                    message="the process running it stopped before it finished",
+                )
+            )
+        if result.rowcount:
+            log.info("marked %d unfinished run(s) interrupted", result.rowcount)
+        return result.rowcount
+
+    # events and queries
+
+    def events(self, run_id: str, *, after: int = -1, limit: int | None = None) -> list[Event]:
+        """The run's events with ``seq > after`` in order, at most ``limit`` of them."""
+        query = (
+            select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
+            .where(EventRow.run_id == run_id, EventRow.seq > after)
+            .order_by(EventRow.seq)
+        )
+        if limit is not None:
+            if limit < 0:
+                raise ValueError(f"limit must be >= 0, got {limit}")
+            query = query.limit(limit)
+        with self.engine.connect() as conn:
+            self._require(conn, run_id)
+            rows = conn.execute(query).all()
+        out: list[Event] = []
+        for seq, t, type_, payload in rows:
+            data = json.loads(payload)
+            data.update(type=type_, run_id=run_id, seq=seq, t=t)
+            out.append(event_from_dict(data))
+        return out
+
+    def last_seq(self, run_id: str) -> int:
+        """The highest stored seq of the run, -1 if it has no events."""
+        with self.engine.connect() as conn:
+            self._require(conn, run_id)
+            last = conn.execute(
+                select(func.max(EventRow.seq)).where(EventRow.run_id == run_id)
+            ).scalar()
+        return -1 if last is None else int(last)
+
+    def stream_queries(
+        self, *, stream: str | None = None, run_ids: list[str] | None = None
+    ) -> list[QueryRecord]:
+        """Stream queries in the order they were stored, optionally of one stream / some runs."""
+        query = select(QueryRow).order_by(QueryRow.id)
+        if stream is not None:
+            query = query.where(QueryRow.stream == stream)
+        if run_ids is not None:
+            query = query.where(QueryRow.run_id.in_(run_ids))
+        with Session(self.engine) as session:
+            return [QueryRecord.from_row(r) for r in session.scalars(query)]
+
+    def write_events(self, run_id: str, events: list[Event]) -> None:
+        """Insert events of one run (and their stream-query rows) in one transaction."""
+        if not events:
+            return
+        event_rows: list[dict[str, Any]] = []
+        query_rows: list[dict[str, Any]] = []
+        for e in events:
+            if e.run_id != run_id:
+                raise ValueError(f"event {e.type} #{e.seq} belongs to run {e.run_id}, not {run_id}")
+            payload = event_payload(e)
+            event_rows.append(
+                {
+                    "run_id": run_id,
+                    "seq": e.seq,
+                    "t": e.t,
+                    "type": e.type,
+                    "payload": _dumps(payload),
+                }
+            )
+            if isinstance(e, StreamQueried):
+                query_rows.append(
+                    {
+                        "run_id": run_id,
+                        "node_id": e.node_id,
+                        "seq": e.seq,
+                        "stream": e.stream,
+                        "input_names": _dumps(e.input_names),
+                        "inputs": _dumps(e.inputs),
+                        "success": e.success,
+                        "wall_s": e.wall_s,
+                        "cpu_s": e.cpu_s,
+                        "execution_s": e.execution_s,
+                        "error": e.error,
+                    }
+                )
+        with self.engine.begin() as conn:
+            conn.execute(insert(EventRow), event_rows)
+            if query_rows:
+                conn.execute(insert(QueryRow), query_rows)
+
+    @staticmethod
+    def _require(conn: Connection, run_id: str) -> None:
+        if conn.execute(select(RunRow.id).where(RunRow.id == run_id)).first() is None:
+            raise _unknown(run_id)
+
+
+def _unknown(run_id: str) -> KeyError:
+    return KeyError(f"unknown run id {run_id!r}")
+
+
+# --- the sink --------------------------------------------------------------------------------
+
+
+class StoreSink:
+    """Writes one run's events to a :class:`RunStore` in batches, one transaction per batch.
+
+    ``emit`` only appends to a buffer; the buffer is written when it holds ``batch_size``
+    events, when the run's last event (finished / failed / cancelled) arrives, when its oldest
+    event is ``flush_interval_s`` old (checked on emit and by a background timer, so a long
+    stream query does not hold events back), and on ``close``. A failed write keeps the batch
+    for the next attempt: events are never dropped silently.
+    """
+
+    def __init__(
+        self,
+        store: RunStore,
+        run_id: str,
+        *,
+        batch_size: int = 200,
+        flush_interval_s: float | None = 0.5,
+    ) -> None:
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        if flush_interval_s is not None and flush_interval_s <= 0:
+            raise ValueError(f"flush_interval_s must be positive, got {flush_interval_s}")
+        self.store = store
+        self.run_id = run_id
+        self.batch_size = batch_size
+        self.flush_interval_s = flush_interval_s
+        self._last_seq = store.last_seq(run_id)  # raises KeyError for an unknown run
+        self._buffer: list[Event] = []
+        self._oldest: float | None = None  # perf_counter when the oldest buffered event came
+        self._lock = threading.Lock()  # guards the buffer
+        self._write_lock = threading.Lock()  # one batch at a time, in seq order
+        self._closed = False
+        self._stop = threading.Event()
+        self._timer: threading.Thread | None = None
+        if flush_interval_s is not None:
+            self._timer = threading.Thread(
+                target=self._flush_periodically, name=f"store-sink-{run_id[:8]}", daemon=True
+            )
+            self._timer.start()
+
+    def __repr__(self) -> str:
+        return f"StoreSink(run_id={self.run_id!r}, batch_size={self.batch_size})"
+
+    def emit(self, event: Event) -> None:
+        if event.run_id != self.run_id:
+            raise ValueError(
+                f"event {event.type} #{event.seq} belongs to run {event.run_id!r}, "
+                f"this sink writes run {self.run_id!r}"
+            )
+        with self._lock:
+            if self._closed:
+                raise RuntimeError(f"{self!r} is closed; event {event.type} #{event.seq} lost")
+            if event.seq <= self._last_seq:
+                raise ValueError(
+                    f"event {event.type} #{event.seq} of run {self.run_id} comes after "
+                    f"#{self._last_seq}: seq must increase"
+                )
+            self._last_seq = event.seq
+            self._buffer.append(event)
+            now = time.perf_counter()
+            if self._oldest is None:
+                self._oldest = now
+            due = (
+                len(self._buffer) >= self.batch_size
+                or event.type in TERMINAL_TYPES
+                or self._stale(now)
+            )
+        if due:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write everything buffered now."""
+        with self._write_lock:
+            with self._lock:
+                batch, self._buffer = self._buffer, []
+                oldest, self._oldest = self._oldest, None
+            if not batch:
+                return
+            try:
+                self.store.write_events(self.run_id, batch)
+            except Exception:
+                with self._lock:  # put the batch back in front, in order, for the next attempt
+                    self._buffer[:0] = batch
+                    self._oldest = oldest
+                raise
+            log.debug("run %s: wrote %d events up to #%d", self.run_id, len(batch), batch[-1].seq)
+
+    def close(self) -> None:
+        """Stop the timer and write what is left; safe to call twice."""
+        with self._lock:
+            self._closed = True
+        self._stop.set()
+        if self._timer is not None and self._timer is not threading.current_thread():
+            self._timer.join()
+        self.flush()
+
+    def _stale(self, now: float) -> bool:
+        return (
+            self.flush_interval_s is not None
+            and self._oldest is not None
+            and now - self._oldest >= self.flush_interval_s
+        )
+
+    def _flush_periodically(self) -> None:
+        assert self.flush_interval_s is not None
+        while not self._stop.wait(self.flush_interval_s / 2):
+            with self._lock:
+                stale = self._stale(time.perf_counter())
+            if stale:
+                try:
+                    self.flush()
+                except Exception:
+                    log.exception("run %s: writing events failed; will retry", self.run_id)

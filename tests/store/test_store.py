@@ -1,0 +1,322 @@
+"""The run store keeps every run, event and stream query, written in batches and read back."""
+
+from __future__ import annotations
+
+import sqlite3
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from planner.events import (
+    Emitter,
+    Event,
+    NodeAdded,
+    NodeVisited,
+    RunFinished,
+    RunStarted,
+    StreamQueried,
+)
+from planner.store import RunStore, StoreSink, default_db_path
+
+CONFIG: dict[str, Any] = {"k": 10, "budget_s": 60.0, "policy": {"c": 1.4}}
+
+
+@pytest.fixture
+def db(tmp_path: Path) -> Path:
+    return tmp_path / "data" / "runs.db"
+
+
+@pytest.fixture
+def store(db: Path) -> Iterator[RunStore]:
+    with RunStore(db) as store:
+        yield store
+
+
+def _emit_search(emitter: Emitter, n: int) -> None:
+    """A run's worth of events: per step a node, a stream query and a back-up."""
+    emitter.emit(RunStarted, scene="line-2", seed=3, planner="learned", config=CONFIG)
+    for i in range(n):
+        emitter.emit(
+            NodeAdded,
+            node_id=i + 1,
+            parent_id=i,
+            plan_index=0,
+            depth=i + 1,
+            stream="sample-pose",
+            success=i % 3 != 0,
+            outputs=[f"#p{i}"],
+            label=f"node {i + 1}",
+        )
+        emitter.emit(
+            StreamQueried,
+            node_id=i + 1,
+            stream="sample-pose" if i % 2 else "test-reachable",
+            input_names=["?b", "?r"],
+            inputs=[f"b{i}", [0.0, 1.5 * i]],
+            success=i % 3 != 0,
+            wall_s=0.01 * i,
+            cpu_s=0.005 * i,
+            execution_s=0.0,
+            error=None if i % 3 else "no sample",
+        )
+        emitter.emit(NodeVisited, node_id=i + 1, visits=i + 1, value=-0.5 * i)
+
+
+class _Recording:
+    """Keeps what the planner emitted, then passes it on to the sink under test."""
+
+    def __init__(self, sink: StoreSink) -> None:
+        self.sink = sink
+        self.events: list[Event] = []
+
+    def emit(self, event: Event) -> None:
+        self.events.append(event)
+        self.sink.emit(event)
+
+    def close(self) -> None:
+        self.sink.close()
+
+
+def test_events_written_in_batches_read_back_equal_and_in_order(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    recording = _Recording(StoreSink(store, run_id, batch_size=7, flush_interval_s=None))
+    _emit_search(Emitter(run_id, recording), 40)  # 121 events: 17 batches written, 2 buffered
+    assert store.events(run_id) == recording.events[:119]
+    recording.close()
+    stored = store.events(run_id)
+    assert [e.seq for e in stored] == list(range(121))
+    assert stored == recording.events  # equal field by field, t included
+
+
+def test_events_after_paginates(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, flush_interval_s=None)
+    _emit_search(Emitter(run_id, sink), 10)  # 31 events
+    sink.close()
+    pages: list[list[int]] = []
+    after = -1
+    while page := store.events(run_id, after=after, limit=8):
+        pages.append([e.seq for e in page])
+        after = page[-1].seq
+    assert pages == [list(range(i, min(i + 8, 31))) for i in range(0, 31, 8)]
+    assert [e.seq for e in store.events(run_id, after=28)] == [29, 30]
+    assert store.events(run_id, after=30) == []
+
+
+def test_stream_queries_rows_come_from_stream_queried_events(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    other = store.create_run("line-2", 4, "baseline", CONFIG)
+    for rid, n in ((run_id, 6), (other, 2)):
+        sink = StoreSink(store, rid, batch_size=4, flush_interval_s=None)
+        _emit_search(Emitter(rid, sink), n)
+        sink.close()
+    rows = store.stream_queries(run_ids=[run_id])
+    events = [e for e in store.events(run_id) if isinstance(e, StreamQueried)]
+    assert len(rows) == len(events) == 6
+    for row, e in zip(rows, events, strict=True):
+        assert (row.run_id, row.seq, row.node_id, row.stream) == (
+            run_id,
+            e.seq,
+            e.node_id,
+            e.stream,
+        )
+        assert (row.input_names, row.inputs) == (e.input_names, e.inputs)
+        assert (row.success, row.error) == (e.success, e.error)
+        assert (row.wall_s, row.cpu_s, row.execution_s) == (e.wall_s, e.cpu_s, e.execution_s)
+    assert rows[0].inputs == ["b0", [0.0, 0.0]] and rows[0].error == "no sample"
+    assert not rows[0].success
+    assert {r.stream for r in store.stream_queries(stream="sample-pose")} == {"sample-pose"}
+    assert len(store.stream_queries(stream="sample-pose")) == 3 + 1
+    assert len(store.stream_queries()) == 8
+    assert store.stream_queries(run_ids=[]) == []
+
+
+def test_finish_run_updates_the_record(store: RunStore) -> None:
+    run_id = store.create_run("kitchen-2", 1, "baseline", CONFIG)
+    record = store.get_run(run_id)
+    assert (record.status, record.finished_at, record.plan) == ("running", None, None)
+    assert record.config == CONFIG and record.created_at.tzinfo is not None
+    plan = {"actions": [{"name": "pick", "args": ["b1", "#g0"]}], "values": {"#g0": [0.1, 0.2]}}
+    done = store.finish_run(
+        run_id,
+        "solved",
+        planning_s=12.5,
+        execution_s=40.0,
+        oracle_s=0.25,
+        queries=93,
+        message="solved",
+        plan=plan,
+    )
+    assert done == store.get_run(run_id)
+    assert (done.status, done.planning_s, done.execution_s, done.oracle_s) == (
+        "solved",
+        12.5,
+        40.0,
+        0.25,
+    )
+    assert (done.queries, done.message, done.plan) == (93, "solved", plan)
+    assert done.finished_at is not None and done.finished_at >= done.created_at
+    with pytest.raises(ValueError, match="already finished with status 'solved'"):
+        store.finish_run(run_id, "failed")
+    with pytest.raises(ValueError, match="unknown final status 'running'"):
+        store.finish_run(store.create_run("kitchen-2", 1, "baseline", {}), "running")
+
+
+def test_list_runs_filters_newest_first(store: RunStore) -> None:
+    a = store.create_run("kitchen-1", 0, "baseline", {})
+    b = store.create_run("kitchen-1", 1, "learned", {})
+    c = store.create_run("kitchen-2", 0, "learned", {})
+    store.finish_run(a, "solved")
+    store.finish_run(b, "timeout")
+    assert [r.id for r in store.list_runs()] == [c, b, a]
+    assert [r.id for r in store.list_runs(status="running")] == [c]
+    assert [r.id for r in store.list_runs(scene="kitchen-1")] == [b, a]
+    assert [r.id for r in store.list_runs(planner="learned", scene="kitchen-1")] == [b]
+    assert [r.id for r in store.list_runs(limit=1, offset=1)] == [b]
+    assert store.list_runs(status="cancelled") == []
+    with pytest.raises(ValueError, match="unknown status 'done'"):
+        store.list_runs(status="done")
+
+
+def test_mark_interrupted_only_touches_running_runs(store: RunStore) -> None:
+    a = store.create_run("kitchen-1", 0, "baseline", {})
+    b = store.create_run("kitchen-1", 1, "baseline", {})
+    c = store.create_run("kitchen-1", 2, "baseline", {})
+    store.finish_run(b, "failed", message="no plan")
+    assert store.mark_interrupted() == 2
+    assert [store.get_run(r).status for r in (a, b, c)] == ["interrupted", "failed", "interrupted"]
+    assert store.get_run(a).finished_at is not None
+    assert store.get_run(b).message == "no plan"
+    assert store.mark_interrupted() == 0
+
+
+def test_close_flushes_everything_buffered(db: Path) -> None:
+    store = RunStore(db)
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, batch_size=10_000, flush_interval_s=60.0)
+    _emit_search(Emitter(run_id, sink), 30)  # 91 events, none written yet
+    assert store.events(run_id) == []
+    sink.close()
+    store.close()
+    with RunStore(db) as again:
+        assert [e.seq for e in again.events(run_id)] == list(range(91))
+        assert len(again.stream_queries(run_ids=[run_id])) == 30
+
+
+def test_terminal_event_flushes_at_once(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, batch_size=10_000, flush_interval_s=None)
+    emitter = Emitter(run_id, sink)
+    _emit_search(emitter, 3)
+    emitter.emit(
+        RunFinished,
+        status="failed",
+        planning_s=1.0,
+        execution_s=None,
+        oracle_s=None,
+        queries=3,
+        message="budget spent",
+    )
+    assert len(store.events(run_id)) == 11  # before close
+    sink.close()
+
+
+def test_timer_flushes_a_quiet_buffer(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, batch_size=10_000, flush_interval_s=0.05)
+    Emitter(run_id, sink).emit(RunStarted, scene="line-2", seed=3, planner="x", config={})
+    deadline = time.monotonic() + 5.0
+    while not store.events(run_id) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert len(store.events(run_id)) == 1  # written while the planner was busy elsewhere
+    sink.close()
+
+
+def test_failed_write_keeps_the_batch(store: RunStore, monkeypatch: pytest.MonkeyPatch) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, batch_size=5, flush_interval_s=None)
+    emitter = Emitter(run_id, sink)
+    real = store.write_events
+    calls = {"n": 0}
+
+    def flaky(rid: str, events: list[Event]) -> None:
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise OSError("database is locked")
+        real(rid, events)
+
+    monkeypatch.setattr(store, "write_events", flaky)
+    with pytest.raises(OSError, match="locked"):
+        _emit_search(emitter, 2)  # the 5th event triggers the failing write
+    _emit_search_rest(emitter)
+    sink.close()
+    assert [e.seq for e in store.events(run_id)] == list(range(emitter.next_seq))
+
+
+def _emit_search_rest(emitter: Emitter) -> None:
+    for i in range(3):
+        emitter.emit(NodeVisited, node_id=1, visits=i + 2, value=0.0)
+
+
+def test_second_store_on_the_same_file_sees_the_data(db: Path, store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, batch_size=4, flush_interval_s=None)
+    _emit_search(Emitter(run_id, sink), 4)
+    sink.close()
+    with RunStore(db) as reader:
+        assert reader.get_run(run_id) == store.get_run(run_id)
+        assert reader.events(run_id) == store.events(run_id)
+        assert len(reader.stream_queries()) == 4
+    with sqlite3.connect(db) as conn:
+        assert conn.execute("PRAGMA journal_mode").fetchone() == ("wal",)
+        indices = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='index'")}
+    assert {"ix_stream_queries_stream", "ix_stream_queries_run_id"} <= indices
+
+
+def test_unknown_run_ids_are_key_errors_naming_the_id(store: RunStore) -> None:
+    for call in (
+        lambda: store.get_run("nope"),
+        lambda: store.events("nope"),
+        lambda: store.finish_run("nope", "failed"),
+        lambda: StoreSink(store, "nope"),
+    ):
+        with pytest.raises(KeyError, match="unknown run id 'nope'"):
+            call()
+
+
+def test_sink_refuses_other_runs_and_repeated_seqs(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 3, "learned", CONFIG)
+    sink = StoreSink(store, run_id, flush_interval_s=None)
+    event = NodeVisited(run_id, 0, 0.0, node_id=1, visits=1, value=0.0)
+    sink.emit(event)
+    with pytest.raises(ValueError, match="seq must increase"):
+        sink.emit(event)
+    with pytest.raises(ValueError, match="belongs to run 'other'"):
+        sink.emit(NodeVisited("other", 1, 0.0, node_id=1, visits=1, value=0.0))
+    sink.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        sink.emit(NodeVisited(run_id, 1, 0.0, node_id=1, visits=1, value=0.0))
+    resumed = StoreSink(store, run_id, flush_interval_s=None)  # continues after the stored seq
+    with pytest.raises(ValueError, match="seq must increase"):
+        resumed.emit(event)
+    resumed.close()
+
+
+def test_default_db_path_follows_xdg(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    assert default_db_path() == tmp_path / "guided-tamp" / "runs.db"
+    monkeypatch.delenv("XDG_DATA_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert default_db_path() == tmp_path / "home" / ".local" / "share" / "guided-tamp" / "runs.db"
+
+
+def test_in_memory_url_is_one_database_across_threads() -> None:
+    with RunStore("sqlite://") as store:
+        run_id = store.create_run("line-2", 0, "x", {})
+        sink = StoreSink(store, run_id, batch_size=1000, flush_interval_s=0.01)
+        _emit_search(Emitter(run_id, sink), 2)
+        sink.close()
+        assert len(store.events(run_id)) == 7

@@ -1,0 +1,93 @@
+"""Planning runs end to end: the baseline solves, every event and query is recorded, the plan
+file validates, and a budget that runs out is a recorded timeout."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from planner.events import RunFinished, RunStarted, SolutionFound, StreamQueried
+from planner.runs import RunConfig, run
+from planner.store import RunStore, StoreSink
+
+pytestmark = pytest.mark.slow
+
+LINE = str(Path(__file__).parent / "search" / "line-reach.json")
+
+
+def tamp(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "planner.cli", *args], capture_output=True, text=True, check=False
+    )
+
+
+def test_recorded_run_keeps_every_event_and_query(tmp_path: Path) -> None:
+    store = RunStore(tmp_path / "runs.db")
+    config = RunConfig(scene=LINE, seed=3, k=4, budget_s=30)
+    run_id = store.create_run(LINE, 3, "baseline", {"k": 4})
+    sink = StoreSink(store, run_id)
+    result, _, _ = run(config, sink=sink, run_id=run_id)
+    sink.close()
+    assert result.solved and result.status == "solved"
+    assert result.oracle_s is not None and result.topk_s <= result.oracle_s <= result.planning_s
+    events = store.events(run_id)
+    assert [e.seq for e in events] == list(range(len(events)))
+    assert isinstance(events[0], RunStarted) and isinstance(events[-1], RunFinished)
+    assert sum(isinstance(e, SolutionFound) for e in events) == 1
+    queried = [e for e in events if isinstance(e, StreamQueried)]
+    assert len(queried) == len(result.queries)
+    rows = store.stream_queries(run_ids=[run_id])
+    assert len(rows) == len(queried)
+    assert {r.stream for r in rows} == {"sample-pose", "test-reachable"}
+    assert any(not r.success for r in rows)  # the short reach makes tests fail
+    store.close()
+
+
+def test_plan_kitchen_1_writes_a_plan_that_validates(tmp_path: Path) -> None:
+    db, plan = tmp_path / "runs.db", tmp_path / "plan.json"
+    proc = tamp(
+        "plan",
+        "--scene",
+        "kitchen-1",
+        "--seed",
+        "1",
+        "--db",
+        str(db),
+        "--out",
+        str(plan),
+        "--json",
+        "--budget",
+        "120",
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["status"] == "solved" and out["valid"] is True
+    assert out["execution_s"] > 0 and out["oracle_s"] <= out["planning_s"]
+    assert set(out["queries"]) == {
+        "sample-grasp",
+        "sample-placement",
+        "inverse-kinematics",
+        "plan-motion",
+    }
+    check = tamp("validate", str(plan))
+    assert check.returncode == 0 and "valid" in check.stdout
+    record = RunStore(db).get_run(out["run_id"])
+    assert record.status == "solved" and record.plan is not None
+
+
+def test_budget_running_out_is_a_recorded_timeout(tmp_path: Path) -> None:
+    db = tmp_path / "runs.db"
+    proc = tamp("plan", "--scene", "kitchen-2", "--budget", "0.01", "--db", str(db), "--json")
+    assert proc.returncode == 1
+    out = json.loads(proc.stdout)
+    assert out["status"] == "timeout"
+    assert RunStore(db).get_run(out["run_id"]).status == "timeout"
+
+
+def test_unknown_planner_lists_the_known() -> None:
+    proc = tamp("plan", "--scene", "kitchen-1", "--planner", "magic")
+    assert proc.returncode == 2 and "baseline" in proc.stderr and "Traceback" not in proc.stderr
