@@ -27,7 +27,7 @@ import threading
 import time
 import types
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import (
     Any,
     ClassVar,
@@ -166,6 +166,10 @@ class StreamQueried(_EventBase):
     cpu_s: float
     execution_s: float  # seconds to execute what the query produced; 0 if nothing moves
     error: str | None  # why the sampler failed (raised, malformed output); None otherwise
+    # The world the sampler saw: fluent facts of the plan's state where its output is first
+    # needed, and the encoded values of their objects (what learned models read as global
+    # features): {"facts": [[predicate, arg, ...], ...], "values": {name: value}}.
+    context: dict[str, Any] = field(default_factory=dict)
 
     def _validate(self) -> None:
         self._non_negative("node_id", "wall_s", "cpu_s", "execution_s")

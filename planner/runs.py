@@ -179,6 +179,9 @@ def _run(
         encode=jsonable,
         progress=say,
         should_stop=should_stop,
+        fluents=frozenset(
+            a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
+        ),
     )
     outcome = search.run(deadline=deadline, start=start)
     queries = [r for _, r in outcome.queries]

@@ -122,6 +122,7 @@ class TreeSearch:
         encode: Callable[[Any], Any] = repr,
         progress: Callable[[str], None] | None = None,
         should_stop: Callable[[], bool] | None = None,
+        fluents: frozenset[str] = frozenset(),
     ) -> None:
         if not skeletons:
             raise ValueError("the search needs at least one stream plan")
@@ -136,6 +137,7 @@ class TreeSearch:
         self.encode = encode
         self.progress = progress
         self.should_stop = should_stop
+        self.fluents = fluents  # predicates recorded as the context of each query
         self.tree = Tree()
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
@@ -213,9 +215,20 @@ class TreeSearch:
                 cpu_s=result.cpu_s,
                 execution_s=result.execution_s,
                 error=result.error,
+                context=self._context_json(context),
             )
         self._added(child)
         return child
+
+    def _context_json(self, context: StreamContext) -> dict[str, Any]:
+        facts = sorted(a for a in context.state if a.predicate in self.fluents)
+        names = {x for a in facts for x in a.args}
+        values = {
+            n: self.encode(context.values[n])
+            for n in sorted(names)
+            if n in context.values and not isinstance(context.values[n], str)
+        }
+        return {"facts": [[a.predicate, *a.args] for a in facts], "values": values}
 
     def _complete(self, node: Node) -> bool:
         return node.success and node.depth == len(self.skeletons[node.plan_index].stream_plan)

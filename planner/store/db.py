@@ -118,6 +118,7 @@ class QueryRow(Base):
     cpu_s: Mapped[float]
     execution_s: Mapped[float]
     error: Mapped[str | None] = mapped_column(Text)
+    context: Mapped[str] = mapped_column(Text, default="{}")  # JSON: facts and values seen
 
 
 # --- records ---------------------------------------------------------------------------------
@@ -176,6 +177,7 @@ class QueryRecord:
     cpu_s: float
     execution_s: float
     error: str | None
+    context: dict[str, Any]
 
     @classmethod
     def from_row(cls, row: QueryRow) -> QueryRecord:
@@ -192,6 +194,7 @@ class QueryRecord:
             cpu_s=row.cpu_s,
             execution_s=row.execution_s,
             error=row.error,
+            context=json.loads(row.context or "{}"),
         )
 
 
@@ -446,6 +449,7 @@ class RunStore:
                         "cpu_s": e.cpu_s,
                         "execution_s": e.execution_s,
                         "error": e.error,
+                        "context": _dumps(e.context),
                     }
                 )
         with self.engine.begin() as conn:
