@@ -34,6 +34,10 @@ Status = Literal["solved", "timeout", "failed", "cancelled"]
 class Policy(Protocol):
     """What the loop asks at each step; pure decisions over the tree's numbers."""
 
+    def initial_plans(self, total: int) -> int:
+        """How many stream plans to open before the first iteration."""
+        ...
+
     def add_plan(self, tree: Tree, plans_added: int, plans_total: int) -> bool:
         """At the root: open the next stream plan (True) or descend into an open one."""
         ...
@@ -60,6 +64,9 @@ class BaselinePolicy:
     """eTAMP's progressive-widening UCT (Ren et al.)."""
 
     config: BaselineConfig = field(default_factory=BaselineConfig)
+
+    def initial_plans(self, total: int) -> int:
+        return 0  # plans are opened one by one by the root's widening rule
 
     def add_plan(self, tree: Tree, plans_added: int, plans_total: int) -> bool:
         if plans_added >= plans_total:
@@ -267,6 +274,9 @@ class TreeSearch:
         """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, or stop."""
         start = time.perf_counter() if start is None else start
         plans_added = 0
+        for _ in range(min(self.policy.initial_plans(len(self.skeletons)), len(self.skeletons))):
+            self._open_plan(plans_added)
+            plans_added += 1
         iterations = 0
         status: Status = "timeout"
         solution: Node | None = None

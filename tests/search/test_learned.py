@@ -1,0 +1,108 @@
+"""The learned policy's arithmetic (Eq. 1 and 4) and decisions, with a hand-written predictor
+standing in for trained models on the pure-Python line domain."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from planner.abstract import AbstractConfig, plan_abstract
+from planner.domains import problem_for_scene
+from planner.events import Emitter, ListSink, ModelPrediction
+from planner.search.binding import stream_contexts
+from planner.search.learned import P_MIN, LearnedPolicy, StreamCost, remaining_cost
+from planner.search.mcts import TreeSearch
+from planner.search.tree import ROOT
+
+SCENE = str(Path(__file__).parent / "line-reach.json")
+
+
+def test_equation_1_and_4() -> None:
+    assert StreamCost(0.5, 1.0, 2.0, 3.0).expected == pytest.approx(1 + 3 + 1 * 2)
+    assert StreamCost(1.0, 1.0, 5.0, 0.0).expected == pytest.approx(1.0)
+    clamped = StreamCost(0.0, 1.0, 2.0, 0.0).expected
+    assert clamped == pytest.approx(1 + (1 - P_MIN) / P_MIN * 2)
+    assert remaining_cost([StreamCost(0.5, 1, 2, 3), StreamCost(1, 1, 5, 0)]) == pytest.approx(7)
+
+
+class ReachOracle:
+    """Knows the line-reach rule: a pose beyond x = 2.25 fails the reach test."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+
+    def predict_rows(
+        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
+    ) -> list[StreamCost]:
+        self.rows += len(rows)
+        out = []
+        for stream, inputs, _ in rows:
+            if stream == "test-reachable" and isinstance(inputs[1], float):
+                out.append(StreamCost(1.0 if abs(inputs[1]) <= 2.25 else 0.0, 0.01, 0.01, 0.0))
+            elif stream == "test-reachable":
+                out.append(StreamCost(0.4, 0.01, 0.01, 0.0))  # unknown pose: 40% reachable
+            else:
+                out.append(StreamCost(1.0, 0.01, 0.01, 0.0))
+        return out
+
+
+def make(sink: ListSink) -> tuple[TreeSearch, LearnedPolicy]:
+    loaded, problem = problem_for_scene(SCENE, seed=3)
+    plans = plan_abstract(loaded.domain, loaded.streams, problem, AbstractConfig(k=4)).plans
+    states = [stream_contexts(p, loaded.domain, problem) for p in plans]
+    values = {o.name: o.name for o in problem.objects} | dict(problem.values)
+    emitter = Emitter("t", sink)
+
+    def emit(node: Any, first: StreamCost, q: float) -> None:
+        emitter.emit(
+            ModelPrediction,
+            node_id=node.id,
+            p_s=first.p_s,
+            r_s=first.r_s,
+            r_f=first.r_f,
+            r_m=first.r_m,
+            q=q,
+        )
+
+    policy = LearnedPolicy(
+        ReachOracle(),
+        plans,
+        states,
+        values,
+        lambda v: v,
+        frozenset({"at", "in", "holding", "hand-empty"}),
+        on_prediction=emit,
+    )
+    search = TreeSearch(
+        plans, states, values, loaded.runtime(problem, seed=3), policy, emitter=emitter
+    )
+    return search, policy
+
+
+def test_learned_search_solves_and_reports_predictions() -> None:
+    sink = ListSink()
+    search, policy = make(sink)
+    result = search.run(deadline=time.perf_counter() + 30)
+    assert result.solved
+    assert len(search.tree[ROOT].children) == len(search.skeletons)  # all plans scored at once
+    predictions = [e for e in sink.events if isinstance(e, ModelPrediction)]
+    assert predictions and all(e.q >= 0 for e in predictions)
+    # Along the solution, a bound reachable pose makes the rest of the plan cheaper.
+    path = search.tree.path(result.node_id or 0)[1:]
+    qs = [policy.q(search.tree, search.tree[i]) for i in path]
+    assert qs[-1] == 0.0 and qs[0] == max(qs)
+
+
+def test_a_bad_binding_makes_querying_again_the_better_action() -> None:
+    search, policy = make(ListSink())
+    search.run(deadline=time.perf_counter() + 30)
+    tree = search.tree
+    # Find a sample-pose node whose pose is out of reach and one within reach.
+    bad = [n for n in tree.nodes[1:] if n.outputs and abs(next(iter(n.outputs.values()))) > 2.25]
+    good = [n for n in tree.nodes[1:] if n.outputs and abs(next(iter(n.outputs.values()))) <= 2.25]
+    assert bad and good
+    assert policy.q(tree, bad[0]) > 5 * policy.q(tree, good[0])
