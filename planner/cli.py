@@ -55,6 +55,16 @@ def _k(text: str) -> int:
     return k
 
 
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= value <= 100_000:
+        raise argparse.ArgumentTypeError(f"expected a number from 1 to 100000, got {value}")
+    return value
+
+
 def _positive(text: str) -> float:
     try:
         value = float(text)
@@ -111,6 +121,33 @@ def build_parser() -> argparse.ArgumentParser:
     )
     pl.add_argument("--no-record", action="store_true", help="do not record the run")
 
+    pl.add_argument("--model", help="model file for --planner learned (default: shipped model)")
+
+    co = sub.add_parser(
+        "collect",
+        help="run many recorded trials (training data)",
+        description="Run trials of one scene on a process pool; every stream query is stored.",
+    )
+    co.add_argument("--scene", required=True)
+    co.add_argument("--planner", choices=PLANNERS, default=DEFAULT_PLANNER)
+    co.add_argument("--trials", type=_count, default=100, help="number of seeds (default 100)")
+    co.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
+    co.add_argument("--budget", type=_positive, default=300.0, help="seconds per trial")
+    co.add_argument("--workers", type=_count, default=2, help="processes (default 2)")
+    co.add_argument("--db", type=Path, required=True, help="SQLite file to record into")
+    co.add_argument("--model", help="model file for --planner learned")
+
+    tr = sub.add_parser(
+        "train",
+        help="train per-stream cost models from recorded stream queries",
+        description="Fit P_S, R_S, R_F, R_M per stream; prints validation AUC and errors.",
+    )
+    tr.add_argument("--db", type=Path, action="append", required=True, help="run store(s)")
+    tr.add_argument("--out", type=Path, required=True, help="model file to write")
+    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--epochs", type=_count, default=300)
+    tr.add_argument("--json", action="store_true", help="machine-readable report")
+
     va = sub.add_parser("validate", help="replay a bound plan in simulation")
     va.add_argument("plan", type=Path, help="a plan file written by `tamp plan --out`")
 
@@ -161,6 +198,7 @@ def _summary(result: AbstractResult) -> dict[str, Any]:
         "returned": result.returned,
         "unique": result.unique,
         "exhausted": result.exhausted,
+        "stop_reason": result.stop_reason,
         "stream_instances": result.instances,
         "distinct_multisets": result.distinct_multisets,
         "distinct_choices": result.distinct_choices,
@@ -225,7 +263,12 @@ def _print_text(
     print(
         f"  {result.instances} optimistic stream instances; {result.rounds} top-k call(s), "
         f"last asked {result.requested}, returned {result.returned}, {result.unique} unique"
-        + ("; the planner has no more plans" if result.exhausted else "")
+        + {
+            "enough": "",
+            "exhausted": "; the planner has no more plans",
+            "limit": "; stopped at the request limit",
+            "no-new-skeletons": "; more plans gave no new skeletons",
+        }[result.stop_reason]
     )
     ignored = ", ".join(result.diversity_ignore)
     print(
@@ -256,7 +299,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from planner.store import RunStore, StoreSink, default_db_path
 
     config = RunConfig(
-        scene=args.scene, seed=args.seed, planner=args.planner, k=args.k, budget_s=args.budget
+        scene=args.scene,
+        seed=args.seed,
+        planner=args.planner,
+        k=args.k,
+        budget_s=args.budget,
+        model=args.model,
     )
     problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
     store = None if args.no_record else RunStore(args.db or default_db_path())
@@ -351,6 +399,47 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if result.solved and valid else 1
 
 
+def cmd_collect(args: argparse.Namespace) -> int:
+    from planner.experiment import Trial, run_trials, stderr_progress
+    from planner.runs import RunConfig
+
+    problem_for_scene(args.scene)  # a bad scene fails before any trial starts
+    RunConfig(scene=args.scene, planner=args.planner, budget_s=args.budget, model=args.model)
+    trials = [
+        Trial(args.scene, seed, args.planner, args.budget, args.model)
+        for seed in range(args.seed_start, args.seed_start + args.trials)
+    ]
+    results = run_trials(trials, args.db, workers=args.workers, progress=stderr_progress)
+    if sys.stderr.isatty():
+        sys.stderr.write("\n")
+    solved = [r for r in results if r.status == "solved"]
+    failed = [r for r in results if r.status == "failed"]
+    queries = sum(r.queries for r in results)
+    print(
+        f"{args.scene} ({args.planner}): {len(solved)}/{len(results)} solved, "
+        f"{len(failed)} failed, {queries} stream queries recorded in {args.db}"
+    )
+    for r in failed:
+        print(f"  seed {r.trial.seed}: {r.error}")
+    return 0
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from planner.learning.train import format_report, load_records, train
+
+    records = load_records(args.db)
+    if not records:
+        raise ValueError(f"no stream queries in {', '.join(map(str, args.db))}")
+    model, report = train(records, seed=args.seed, epochs=args.epochs)
+    model.save(args.out)
+    if args.json:
+        print(json.dumps(report.to_dict(), indent=2))
+    else:
+        print(format_report(report))
+        print(f"model written to {args.out}")
+    return 0
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
     from planner.domains.kitchen.plan_io import read_plan
     from planner.domains.kitchen.validate import validate_plan
@@ -390,11 +479,22 @@ def cmd_serve(_: argparse.Namespace) -> int:
 COMMANDS = {
     "abstract": cmd_abstract,
     "plan": cmd_plan,
+    "collect": cmd_collect,
+    "train": cmd_train,
     "validate": cmd_validate,
     "render": cmd_render,
     "scenes": cmd_scenes,
     "serve": cmd_serve,
 }
+
+
+def _model_errors() -> tuple[type[Exception], ...]:
+    """Model-file errors, without importing torch for commands that do not need it."""
+    if "planner.learning.model" not in sys.modules:
+        return ()
+    from planner.learning.model import ModelError
+
+    return (ModelError,)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -406,6 +506,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     try:
         return COMMANDS[args.command](args)
+    except _model_errors() as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     except USER_ERRORS as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

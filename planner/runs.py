@@ -13,30 +13,36 @@ import uuid
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
 from planner.abstract import AbstractConfig, plan_abstract
+from planner.abstract.skeleton import AbstractPlan
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.events import (
     AbstractPlansFound,
     Emitter,
     EventSink,
     ListSink,
+    ModelPrediction,
     RunCancelled,
     RunFailed,
     RunFinished,
     RunStarted,
 )
-from planner.pddl.structs import Problem
+from planner.pddl.structs import Atom, Problem
 from planner.search.baseline import BaselineConfig
 from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
-from planner.search.mcts import BaselinePolicy, TreeSearch
+from planner.search.learned import LearnedPolicy, StreamCost
+from planner.search.mcts import BaselinePolicy, Policy, TreeSearch
+from planner.search.tree import Node
 from planner.streams.runtime import QueryResult
 
 log = logging.getLogger(__name__)
 
-PLANNERS = ("baseline", "sequential")  # known planner names
+PLANNERS = ("baseline", "learned", "sequential")  # known planner names
 DEFAULT_PLANNER = "baseline"
+DEFAULT_MODEL = Path(__file__).resolve().parent / "learning" / "models" / "kitchen.pt"
 
 
 @dataclass(frozen=True)
@@ -48,6 +54,7 @@ class RunConfig:
     budget_s: float = 300.0  # wall-clock budget of the run, top-k included
     attempts: int = 10  # sequential only: queries of one stream before a restart
     restarts: int = 3  # sequential only: restarts of one skeleton before the next
+    model: str | None = None  # learned only: model file (default: the shipped kitchen model)
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -169,19 +176,26 @@ def _run(
         return _sequential(config, run_id, abstract.plans, loaded, problem, runtime, start, topk_s)
     initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
     initial.update(problem.values)
+    states = [stream_contexts(p, loaded.domain, problem) for p in abstract.plans]
+    fluents = frozenset(
+        a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
+    )
+    policy: Policy
+    if config.planner == "learned":
+        policy = _learned_policy(config, loaded, abstract.plans, states, initial, fluents, emitter)
+    else:
+        policy = BaselinePolicy(BaselineConfig())
     search = TreeSearch(
         abstract.plans,
-        [stream_contexts(p, loaded.domain, problem) for p in abstract.plans],
+        states,
         initial,
         runtime,
-        BaselinePolicy(BaselineConfig()),
+        policy,
         emitter=emitter,
         encode=jsonable,
         progress=say,
         should_stop=should_stop,
-        fluents=frozenset(
-            a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
-        ),
+        fluents=fluents,
     )
     outcome = search.run(deadline=deadline, start=start)
     queries = [r for _, r in outcome.queries]
@@ -207,6 +221,35 @@ def _run(
         len(search.tree),
     )
     return result, loaded, problem
+
+
+def _learned_policy(
+    config: RunConfig,
+    loaded: LoadedDomain,
+    plans: tuple[AbstractPlan, ...],
+    states: list[list[frozenset[Atom]]],
+    initial: dict[str, Any],
+    fluents: frozenset[str],
+    emitter: Emitter,
+) -> Policy:
+    from planner.learning.predictor import ModelPredictor
+
+    predictor = ModelPredictor.load(
+        Path(config.model) if config.model else DEFAULT_MODEL, domain=loaded.spec.name
+    )
+
+    def report(node: Node, first: StreamCost, q: float) -> None:
+        emitter.emit(
+            ModelPrediction,
+            node_id=node.id,
+            p_s=first.p_s,
+            r_s=first.r_s,
+            r_f=first.r_f,
+            r_m=first.r_m,
+            q=q,
+        )
+
+    return LearnedPolicy(predictor, plans, states, initial, jsonable, fluents, on_prediction=report)
 
 
 def _sequential(

@@ -77,6 +77,7 @@ class AbstractResult:
     instances: int  # optimistic stream instances
     seconds: dict[str, float] = field(default_factory=dict)  # instantiate, topk, recover, total
     diversity_ignore: tuple[str, ...] = ()  # as in the config
+    stop_reason: str = "enough"  # enough | exhausted | limit | no-new-skeletons
 
     @property
     def distinct_multisets(self) -> int:
@@ -139,6 +140,8 @@ def plan_abstract(
     backend = get_topk_planner(config.backend)
     request = min(math.ceil(config.k * config.oversample), config.max_requested)
     rounds, t_topk, t_recover = 0, 0.0, 0.0
+    previous_unique = 0
+    stop_reason = "enough"
     while True:
         rounds += 1
         say(f"{config.backend}: asking for {request} plans (call {rounds})")
@@ -161,8 +164,17 @@ def plan_abstract(
         )
         log.info(message)
         say(message)
-        if len(unique) >= config.k or result.exhausted or request >= config.max_requested:
+        if len(unique) >= config.k:
+            stop_reason = "enough"
             break
+        if result.exhausted or request >= config.max_requested:
+            stop_reason = "exhausted" if result.exhausted else "limit"
+            break
+        if rounds > 1 and len(unique) <= previous_unique:
+            stop_reason = "no-new-skeletons"
+            log.info("no new skeletons in %d more plans; stopping at %d", request, len(unique))
+            break  # a domain with cycles has endless plans but no new stream plans
+        previous_unique = len(unique)
         request = min(math.ceil(request * config.growth), config.max_requested)
     chosen = _select_diverse(list(unique.values()), config.k, config.diversity_ignore)
     total = time.perf_counter() - t0
@@ -182,4 +194,5 @@ def plan_abstract(
             "total": total,
         },
         diversity_ignore=config.diversity_ignore,
+        stop_reason=stop_reason,
     )

@@ -65,7 +65,7 @@ def _solve(ss: og.SimpleSetup, config: MotionConfig, seed: int | None) -> og.Pat
     solved = ss.solve(config.timeout_s)
     if not solved or not ss.haveExactSolutionPath():
         return None
-    ss.simplifySolution()
+    ss.simplifySolution(config.timeout_s / 2)  # bounded: unbounded simplifying took seconds
     path: og.PathGeometric = ss.getSolutionPath()
     if config.waypoints:
         path.interpolate(config.waypoints)

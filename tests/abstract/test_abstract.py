@@ -111,7 +111,8 @@ def test_growing_requests_until_k_unique(line: LoadedDomain, line_problem: Probl
     assert result.unique >= len(result.plans)
     if result.rounds > 1:
         assert result.requested > 30
-    assert len(result.plans) == 30 or result.exhausted
+    assert len(result.plans) == 30 or result.stop_reason in ("exhausted", "no-new-skeletons")
+    assert (len(result.plans) == 30) == (result.stop_reason == "enough")
 
 
 @pytest.mark.parametrize(

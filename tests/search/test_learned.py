@@ -106,3 +106,22 @@ def test_a_bad_binding_makes_querying_again_the_better_action() -> None:
     good = [n for n in tree.nodes[1:] if n.outputs and abs(next(iter(n.outputs.values()))) <= 2.25]
     assert bad and good
     assert policy.q(tree, bad[0]) > 5 * policy.q(tree, good[0])
+
+
+def test_policy_prefers_the_cheap_certain_branch() -> None:
+    search, policy = make(ListSink())
+    tree = search.tree
+    plan = search.skeletons[0]
+    i = next(j for j, s in enumerate(plan.stream_plan) if s.stream == "sample-pose")
+    assert all(not s.outputs for s in plan.stream_plan[:i])  # only tests come before
+    node = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    for depth in range(1, i + 1):  # the tests before it succeeded
+        node = tree.add(node.id, plan_index=0, depth=depth, success=True)
+    pose = plan.stream_plan[i].outputs[0]
+    # Two bindings of the pose: one the gripper reaches, one it cannot.
+    certain = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5})
+    unlikely = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 3.9})
+    node.visits, certain.visits, unlikely.visits = 2, 1, 1
+    assert policy.q(tree, unlikely) > policy.q(tree, certain)
+    assert policy.pick_child(tree, node).id == certain.id
+    assert not policy.expand(tree, node)  # a certain child beats sampling the pose again

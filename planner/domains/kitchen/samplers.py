@@ -44,10 +44,14 @@ class SamplerConfig:
     ik_attempts: int = 12  # collision-free base poses tried per IK query
     base_attempts: int = 30  # candidate base poses drawn for each of those
     reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
-    approach: float = 0.08  # pre-grasp distance along the tool's x axis, metres
-    motion: MotionConfig = field(default_factory=MotionConfig)  # OMPL, per motion segment
+    approach: float = 0.10  # pre-grasp distance along the tool's x axis, metres
+    motion: MotionConfig = field(default_factory=MotionConfig)  # OMPL for the base
+    arm_motion: MotionConfig = field(  # OMPL for the arm: ~2 cm at the gripper between checks
+        default_factory=lambda: MotionConfig(resolution=0.002)
+    )
     workspace_margin: float = 1.2  # base may roam this far beyond the fixtures, metres
-    clearance: float = 0.01  # metres kept from obstacles along planned motions
+    clearance: float = 0.015  # metres kept from obstacles along planned motions
+    max_straight: float = 0.6  # radians any joint may turn on the straight approach move
 
 
 def _grasps(size: float, approach: float) -> list[Grasp]:
@@ -183,36 +187,65 @@ class KitchenSamplers:
         self, block: str, pose: BlockPose, grasp: Grasp, *, context: StreamContext | None = None
     ) -> tuple[Conf] | None:
         self._apply(context)
-        held = self.world.held
-        placed = dict(self.world._placed)
-        if held is None or held[0] != block:
+        world = self.world
+        placing = world.held is not None and world.held[0] == block
+        placed = dict(world._placed)
+        if not placing:
             placed[block] = pose  # picking: the block stands at the pose
-        self.world.hold(None)
-        self.world.set_blocks(placed)
+        world.hold(None)
+        world.set_blocks(placed)
         tool_world = multiply(block_pose_to_pose(pose), grasp.tool_in_block)
         pre_world = multiply(tool_world, ((-grasp.approach, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         torso = self.geometry.robot.torso
+        # Picking, the gripper closes around the block; placing, the block rides in it.
+        touching = () if placing else (block,)
         for _ in range(self.config.ik_attempts):
+            world.hold(None)
             base = self._sample_base(pose)
             if base is None:
                 continue
+            if placing:
+                world.hold(block, grasp)
             base_pose = ((base[0], base[1], 0.0), quat_from_euler(0.0, 0.0, base[2]))
             tool = multiply(invert(base_pose), tool_world)
             pre = multiply(invert(base_pose), pre_world)
             for arm in arm_ik(self.arm, tool[0], tool[1], torso=torso)[:4]:
                 conf = Conf(base, torso, arm)
-                self.world.set_conf(conf)
-                if self.world.robot_collides(ignore=(block,)):
+                world.set_conf(conf)
+                if world.robot_collides(ignore=touching):
                     continue
                 approach = arm_ik(self.arm, pre[0], pre[1], torso=torso, nearest_to=arm)
-                if not approach:
+                if not approach or not self._straight_ok(base, torso, approach[0], arm, touching):
                     continue
                 conf = Conf(base, torso, arm, approach[0])
-                self.world.set_conf(conf, approach=True)
-                if self.world.robot_collides(clearance=self.config.clearance):
+                world.set_conf(conf, approach=True)
+                # Motion planning starts and ends here, so it must keep the same clearance.
+                if world.robot_collides(clearance=self.config.clearance):
                     continue
                 return (conf,)
         return None
+
+    def _straight_ok(
+        self,
+        base: BaseConf,
+        torso: float,
+        start: tuple[float, ...],
+        end: tuple[float, ...],
+        touching: tuple[str, ...],
+    ) -> bool:
+        """The straight joint-space move between approach and grasp: short and collision-free
+        (the executed trajectory takes it without planning)."""
+        step = max(abs(a - b) for a, b in zip(start, end, strict=True))
+        if step > self.config.max_straight:
+            return False
+        n = max(2, math.ceil(step / 0.02))
+        for i in range(1, n):
+            t = i / n
+            arm = tuple(a + t * (b - a) for a, b in zip(start, end, strict=True))
+            self.world.set_conf(Conf(base, torso, arm))
+            if self.world.robot_collides(ignore=touching):
+                return False
+        return True
 
     def _sample_base(self, pose: BlockPose) -> BaseConf | None:
         """A base pose facing the block, within reach, its footprint clear of every fixture."""
@@ -253,7 +286,12 @@ class KitchenSamplers:
             if max(abs(x - y) for x, y in zip(a, b, strict=True)) < 1e-6:
                 return True
             path = plan_joint_motion(
-                a, b, arm_valid_at(base), lower=self.lower, upper=self.upper, config=cfg
+                a,
+                b,
+                arm_valid_at(base),
+                lower=self.lower,
+                upper=self.upper,
+                config=self.config.arm_motion,
             )
             if path is None:
                 return False

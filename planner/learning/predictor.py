@@ -1,0 +1,37 @@
+"""The trained models as the search's :class:`~planner.search.learned.Predictor`."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from planner.learning.model import CostModel
+from planner.search.learned import StreamCost
+
+
+class ModelPredictor:
+    """Groups rows by stream so each stream's rows go through its network in one pass."""
+
+    def __init__(self, model: CostModel) -> None:
+        self.model = model
+
+    @classmethod
+    def load(cls, path: Path, *, domain: str) -> ModelPredictor:
+        return cls(CostModel.load(path, domain=domain))
+
+    def predict_rows(
+        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
+    ) -> list[StreamCost]:
+        by_stream: dict[str, list[int]] = defaultdict(list)
+        for i, (stream, _, _) in enumerate(rows):
+            by_stream[stream].append(i)
+        out: list[StreamCost | None] = [None] * len(rows)
+        for stream, indices in by_stream.items():
+            pred = self.model.predict_queries(stream, [(rows[i][1], rows[i][2]) for i in indices])
+            for j, i in enumerate(indices):
+                out[i] = StreamCost(
+                    float(pred.p_s[j]), float(pred.r_s[j]), float(pred.r_f[j]), float(pred.r_m[j])
+                )
+        return [c for c in out if c is not None]

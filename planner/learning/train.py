@@ -1,0 +1,536 @@
+"""Training per-stream cost models on recorded stream queries, and the validation report.
+
+Queries are split into training and validation BY RUN (queries of one run are correlated: same
+scene, same search), seeded. For each stream with at least ``min_queries`` queries an MLP is fit
+full-batch with Adam on: binary cross-entropy for success; squared error of log-seconds for R_S
+on successes (wall seconds), R_F on failures (wall seconds) and R_M on successes that produced a
+trajectory (execution seconds). A stream with too few queries keeps its prior (success rate and
+mean costs) and a warning is logged.
+
+The data are small and the scene features are constant within a run, so an unregularised
+network memorises runs (training loss ~0, validation worse than the prior). Each Adam step
+therefore sees freshly corrupted rows: value inputs (poses, grasps, confs) unbound at random,
+which is also what the planner asks about before those inputs are sampled; the scene part
+zeroed for half the rows; Gaussian noise on every feature."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import torch
+from torch import nn
+
+from planner.learning.features import FEATURE_VERSION, Featurizer
+from planner.learning.model import (
+    COST_HEADS,
+    MIN_SECONDS,
+    CostModel,
+    Prediction,
+    Prior,
+    StreamNet,
+    StreamNetwork,
+    torch_threads,
+)
+from planner.store import QueryRecord, RunStore
+
+log = logging.getLogger(__name__)
+
+EPOCHS = 300  # full-batch Adam steps per stream
+LEARNING_RATE = 3e-3  # Adam step size
+WEIGHT_DECAY = 1e-4  # Adam L2 penalty
+UNBIND_PROBABILITY = 0.25  # per epoch: chance that a value input of a row is unbound
+SCENE_DROP_PROBABILITY = 0.5  # per epoch: chance that a row's scene features are zeroed
+INPUT_NOISE = 0.3  # per epoch: std of Gaussian noise on every feature (metres, radians, 0/1)
+TORCH_THREADS = 1  # deterministic results, and polite to planners sharing the machine
+
+
+class LoadedRecords(list[QueryRecord]):
+    """Stream queries read by :func:`load_records`, remembering where they came from (the model
+    file's metadata names the data)."""
+
+    def __init__(
+        self,
+        records: Iterable[QueryRecord],
+        *,
+        sources: Sequence[Path] = (),
+        run_scenes: Mapping[str, str] | None = None,
+    ) -> None:
+        super().__init__(records)
+        self.sources = tuple(sources)
+        self.run_scenes = dict(run_scenes or {})
+
+
+def load_records(db_paths: Sequence[Path]) -> LoadedRecords:
+    """Every stream query in the given run stores (SQLite files), in stored order."""
+    records: list[QueryRecord] = []
+    scenes: dict[str, str] = {}
+    seen: set[tuple[str, int]] = set()
+    for raw in db_paths:
+        path = Path(raw)
+        if not path.is_file():
+            raise FileNotFoundError(f"no run store at {path}")
+        with RunStore(path) as store:
+            queries = store.stream_queries()
+            for run_id in sorted({q.run_id for q in queries}):
+                scenes[run_id] = store.get_run(run_id).scene
+        for q in queries:
+            if (q.run_id, q.seq) in seen:
+                continue  # the same store given twice
+            seen.add((q.run_id, q.seq))
+            records.append(q)
+        log.info("%s: %d stream queries", path, len(queries))
+    return LoadedRecords(records, sources=[Path(p) for p in db_paths], run_scenes=scenes)
+
+
+# --- the report ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StreamReport:
+    """Validation of one stream's model against its prior (errors in seconds; None: no data)."""
+
+    stream: str
+    n_train: int
+    n_val: int
+    prior_used: bool  # too few queries: the model answers with the prior
+    success_rate: float | None  # in the training queries (None: no training queries)
+    auc: float | None  # of P_S on validation; None when validation holds one class only
+    log_loss: float | None  # of P_S on validation
+    prior_log_loss: float | None
+    mae_r_s: float | None  # median |error| of R_S on validation successes
+    mae_r_f: float | None  # ... of R_F on validation failures
+    mae_r_m: float | None  # ... of R_M on validation successes that move
+    prior_mae_r_s: float | None
+    prior_mae_r_f: float | None
+    prior_mae_r_m: float | None
+
+
+@dataclass(frozen=True)
+class TrainReport:
+    streams: tuple[StreamReport, ...]
+    train_runs: tuple[str, ...]
+    val_runs: tuple[str, ...]
+    seed: int
+    epochs: int
+
+    def stream(self, name: str) -> StreamReport:
+        for s in self.streams:
+            if s.stream == name:
+                return s
+        known = ", ".join(s.stream for s in self.streams)
+        raise KeyError(f"no stream {name!r} in the report (streams: {known})")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "seed": self.seed,
+            "epochs": self.epochs,
+            "train_runs": list(self.train_runs),
+            "val_runs": list(self.val_runs),
+            "streams": [asdict(s) for s in self.streams],
+        }
+
+
+def _num(value: float | None, digits: int = 3) -> str:
+    return "-" if value is None else f"{value:.{digits}g}"
+
+
+def _percent(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.1f}"
+
+
+def format_report(report: TrainReport) -> str:
+    """A table: per stream, sizes, AUC and log loss of P_S, and median absolute errors of the
+    costs on validation, each with the prior's value in parentheses."""
+    header = (
+        f"{'stream':<20} {'train':>6} {'val':>5} {'model':>6} {'ok%':>5} {'AUC':>5} "
+        f"{'logloss (prior)':>16} {'|err| R_S s (prior)':>20} {'|err| R_F s (prior)':>20} "
+        f"{'|err| R_M s (prior)':>20}"
+    )
+    lines = [
+        f"{len(report.train_runs)} training runs, {len(report.val_runs)} validation runs, "
+        f"seed {report.seed}, {report.epochs} epochs",
+        header,
+        "-" * len(header),
+    ]
+
+    def pair(model: float | None, prior: float | None) -> str:
+        return f"{_num(model)} ({_num(prior)})"
+
+    for s in report.streams:
+        lines.append(
+            f"{s.stream:<20} {s.n_train:>6} {s.n_val:>5} {'prior' if s.prior_used else 'mlp':>6} "
+            f"{_percent(s.success_rate):>5} {_num(s.auc, 2):>5} "
+            f"{pair(s.log_loss, s.prior_log_loss):>16} {pair(s.mae_r_s, s.prior_mae_r_s):>20} "
+            f"{pair(s.mae_r_f, s.prior_mae_r_f):>20} {pair(s.mae_r_m, s.prior_mae_r_m):>20}"
+        )
+    return "\n".join(lines)
+
+
+# --- metrics ---------------------------------------------------------------------------------
+
+
+def auc(labels: npt.ArrayLike, scores: npt.ArrayLike) -> float | None:
+    """Area under the ROC curve (Mann-Whitney U with tied scores sharing their mean rank);
+    None when only one class occurs."""
+    y = np.asarray(labels, dtype=bool)
+    s = np.asarray(scores, dtype=np.float64)
+    n_pos = int(y.sum())
+    n_neg = len(y) - n_pos
+    if n_pos == 0 or n_neg == 0:
+        return None
+    order = np.argsort(s, kind="mergesort")
+    sorted_scores = s[order]
+    ranks = np.empty(len(s), dtype=np.float64)
+    start = 0
+    while start < len(s):
+        end = start
+        while end + 1 < len(s) and sorted_scores[end + 1] == sorted_scores[start]:
+            end += 1
+        ranks[order[start : end + 1]] = (start + end) / 2 + 1  # 1-based mean rank of the tie
+        start = end + 1
+    u = ranks[y].sum() - n_pos * (n_pos + 1) / 2
+    return float(u / (n_pos * n_neg))
+
+
+def _log_loss(labels: npt.NDArray[np.bool_], p: npt.NDArray[np.float64]) -> float | None:
+    if len(labels) == 0:
+        return None
+    q = np.clip(p, 1e-7, 1 - 1e-7)
+    return float(-np.mean(np.where(labels, np.log(q), np.log(1 - q))))
+
+
+def _median_abs(
+    predicted: npt.NDArray[np.float64], actual: npt.NDArray[np.float64], where: npt.NDArray[Any]
+) -> float | None:
+    if not where.any():
+        return None
+    return float(np.median(np.abs(predicted[where] - actual[where])))
+
+
+# --- training --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Targets:
+    success: npt.NDArray[np.bool_]
+    wall_s: npt.NDArray[np.float64]
+    execution_s: npt.NDArray[np.float64]
+
+    @classmethod
+    def of(cls, records: Sequence[QueryRecord]) -> _Targets:
+        return cls(
+            np.array([r.success for r in records], dtype=bool),
+            np.array([r.wall_s for r in records], dtype=np.float64),
+            np.array([r.execution_s for r in records], dtype=np.float64),
+        )
+
+    def head_masks(self, moves: bool) -> npt.NDArray[np.bool_]:
+        """(n, 3): which rows carry a target for R_S, R_F, R_M."""
+        ok = self.success
+        return np.stack([ok, ~ok, ok & (self.execution_s > 0) & moves], axis=1)
+
+    def log_costs(self) -> npt.NDArray[np.float64]:
+        """(n, 3) log-seconds targets of R_S, R_F (both wall) and R_M (execution)."""
+        wall = np.log(np.maximum(self.wall_s, MIN_SECONDS))
+        execution = np.log(np.maximum(self.execution_s, MIN_SECONDS))
+        return np.stack([wall, wall, execution], axis=1)
+
+
+def split_runs(
+    run_ids: Iterable[str], *, val_fraction: float, seed: int
+) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Seeded split of run ids into (train, validation); validation gets ``val_fraction`` of
+    the runs (at least one when there are two or more runs and the fraction is positive)."""
+    if not 0.0 <= val_fraction < 1.0:
+        raise ValueError(f"val_fraction must be in [0, 1), got {val_fraction}")
+    runs = sorted(set(run_ids))
+    n_val = round(val_fraction * len(runs))
+    if val_fraction > 0 and len(runs) >= 2:
+        n_val = min(max(n_val, 1), len(runs) - 1)
+    order = np.random.default_rng(seed).permutation(len(runs))
+    val = tuple(sorted(runs[i] for i in order[:n_val]))
+    train = tuple(sorted(runs[i] for i in order[n_val:]))
+    return train, val
+
+
+@dataclass(frozen=True)
+class _Corruption:
+    """Per-epoch corruption of training rows (fresh each epoch, seeded).
+
+    Value inputs (poses, grasps, confs) are unbound (zeroed, mask bit set) as the planner asks
+    about streams before their inputs are sampled; the scene part is dropped now and then, as
+    it is constant within a run and a network keys on it to memorise runs; small Gaussian noise
+    on every feature smooths the fit. Names (problem objects) are always bound.
+    """
+
+    value_slots: tuple[tuple[int, int], ...]  # (offset, width) of each pose/grasp/conf slot
+    scene: tuple[int, int]  # (offset, width) of the scene features
+
+    @classmethod
+    def of(cls, featurizer: Featurizer, stream: str) -> _Corruption:
+        layout = featurizer.spec.layout(stream)
+        slots = []
+        offset = 0
+        for slot in layout.slots if layout is not None else ():
+            if slot.kind != "name":
+                slots.append((offset, slot.width))
+            offset += slot.width
+        return cls(tuple(slots), (offset, featurizer.spec.scene_width))
+
+    def apply(self, x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
+        out = x.clone()
+        n = len(x)
+        for offset, width in self.value_slots:
+            drop = torch.rand(n, generator=generator) < UNBIND_PROBABILITY
+            out[drop, offset : offset + width] = 0.0
+            out[drop, offset] = 1.0
+        start, width = self.scene
+        drop = torch.rand(n, generator=generator) < SCENE_DROP_PROBABILITY
+        out[drop, start : start + width] = 0.0
+        return out + INPUT_NOISE * torch.randn(out.shape, generator=generator)
+
+
+def _loss(
+    out: torch.Tensor, success: torch.Tensor, z: torch.Tensor, mask: torch.Tensor
+) -> torch.Tensor:
+    """Binary cross-entropy of success plus the mean squared error of each cost head over the
+    rows that carry its target."""
+    counts = mask.sum(0).clamp(min=1.0)
+    bce = nn.functional.binary_cross_entropy_with_logits(out[:, 0], success)
+    return bce + (((out[:, 1:] - z) ** 2 * mask).sum(0) / counts).sum()
+
+
+@dataclass(frozen=True)
+class _Batch:
+    """Rows and targets as tensors (z: log-seconds standardised by the network's buffers)."""
+
+    x: torch.Tensor
+    success: torch.Tensor
+    z: torch.Tensor
+    mask: torch.Tensor
+
+    @classmethod
+    def of(cls, x: npt.NDArray[np.float32], t: _Targets, moves: bool, net: StreamNet) -> _Batch:
+        y = (t.log_costs() - net.y_mean.numpy()) / net.y_std.numpy()
+        return cls(
+            torch.from_numpy(x),
+            torch.from_numpy(t.success.astype(np.float32)),
+            torch.from_numpy(y.astype(np.float32)),
+            torch.from_numpy(t.head_masks(moves).astype(np.float32)),
+        )
+
+
+def _new_network(
+    x: npt.NDArray[np.float32], t: _Targets, moves: bool, prior: Prior, seed: int
+) -> StreamNet:
+    """A seeded network whose buffers centre the inputs (scaling only spreads above 1, so rare
+    one-hot columns are not blown up) and standardise the log-seconds targets, with the success
+    logit starting at the prior's."""
+    heads = t.head_masks(moves)
+    y_log = t.log_costs()
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        net = StreamNet(x.shape[1])
+    x_t = torch.from_numpy(x)
+    net.x_mean.copy_(x_t.mean(0))
+    net.x_std.copy_(x_t.std(0).clamp(min=1.0) if len(x) > 1 else torch.ones(x.shape[1]))
+    for j in range(len(COST_HEADS)):
+        col = y_log[heads[:, j], j]
+        if len(col):
+            net.y_mean[j] = float(col.mean())
+            net.y_std[j] = float(col.std()) if len(col) > 1 and col.std() > 0.05 else 1.0
+    last = net.body[-1]
+    assert isinstance(last, nn.Linear)
+    with torch.no_grad():
+        last.bias.zero_()
+        last.bias[0] = math.log(prior.p_s / (1 - prior.p_s))
+    return net
+
+
+def _run_adam(
+    net: StreamNet, batch: _Batch, corruption: _Corruption, *, epochs: int, seed: int
+) -> None:
+    """Full-batch Adam, each step on freshly corrupted rows."""
+    generator = torch.Generator().manual_seed(seed)
+    optimiser = torch.optim.Adam(net.parameters(), lr=LEARNING_RATE, weight_decay=WEIGHT_DECAY)
+    net.train()
+    for _ in range(epochs):
+        optimiser.zero_grad()
+        out = net(corruption.apply(batch.x, generator))
+        loss = _loss(out, batch.success, batch.z, batch.mask)
+        loss.backward()  # type: ignore[no-untyped-call]
+        optimiser.step()
+    net.eval()
+
+
+def _fit_stream(
+    records: Sequence[QueryRecord],
+    featurizer: Featurizer,
+    stream: str,
+    prior: Prior,
+    *,
+    seed: int,
+    epochs: int,
+) -> StreamNetwork:
+    t = _Targets.of(records)
+    moves = bool((t.execution_s > 0).any())
+    x = featurizer.matrix(stream, ((r.inputs, r.context) for r in records))
+    net = _new_network(x, t, moves, prior, seed)
+    corruption = _Corruption.of(featurizer, stream)
+    _run_adam(net, _Batch.of(x, t, moves, net), corruption, epochs=epochs, seed=seed)
+    heads = [bool(t.head_masks(moves)[:, j].any()) for j in range(len(COST_HEADS))]
+    return StreamNetwork(net, (heads[0], heads[1], heads[2]))
+
+
+def _evaluate(
+    stream: str,
+    model: CostModel,
+    records: Sequence[QueryRecord],
+    moves: bool,
+    *,
+    n_train: int,
+    prior_used: bool,
+    success_rate: float | None,
+) -> StreamReport:
+    x = model.featurizer.matrix(stream, ((r.inputs, r.context) for r in records))
+    t = _Targets.of(records)
+    heads = t.head_masks(moves)
+    predicted = model.predict(stream, x)
+    baseline = model.prior(stream).predict(len(records))
+
+    def errors(p: Prediction) -> list[float | None]:
+        return [
+            _median_abs(p.r_s, t.wall_s, heads[:, 0]),
+            _median_abs(p.r_f, t.wall_s, heads[:, 1]),
+            _median_abs(p.r_m, t.execution_s, heads[:, 2]),
+        ]
+
+    mae = errors(predicted)
+    prior_mae = errors(baseline)
+    return StreamReport(
+        stream=stream,
+        n_train=n_train,
+        n_val=len(records),
+        prior_used=prior_used,
+        success_rate=success_rate,
+        auc=auc(t.success, predicted.p_s),
+        log_loss=_log_loss(t.success, predicted.p_s),
+        prior_log_loss=_log_loss(t.success, baseline.p_s),
+        mae_r_s=mae[0],
+        mae_r_f=mae[1],
+        mae_r_m=mae[2],
+        prior_mae_r_s=prior_mae[0],
+        prior_mae_r_f=prior_mae[1],
+        prior_mae_r_m=prior_mae[2],
+    )
+
+
+def train(
+    records: Sequence[QueryRecord],
+    *,
+    seed: int = 0,
+    epochs: int = EPOCHS,
+    val_fraction: float = 0.2,
+    min_queries: int = 30,
+    domain: str = "kitchen",
+    metadata: Mapping[str, Any] | None = None,
+) -> tuple[CostModel, TrainReport]:
+    """Fit one network per stream on the training runs and report on the validation runs.
+
+    ``metadata`` is stored in the model file, on top of what is known: the number of runs and
+    queries, seed, date and, for :func:`load_records` output, the data files and scene names.
+    """
+    if not records:
+        raise ValueError("no stream queries to train on")
+    if epochs < 1:
+        raise ValueError(f"epochs must be >= 1, got {epochs}")
+    if min_queries < 1:
+        raise ValueError(f"min_queries must be >= 1, got {min_queries}")
+    train_runs, val_runs = split_runs(
+        (r.run_id for r in records), val_fraction=val_fraction, seed=seed
+    )
+    val_set = set(val_runs)
+    training = [r for r in records if r.run_id not in val_set]
+    validation = [r for r in records if r.run_id in val_set]
+    featurizer = Featurizer.fit(training, domain=domain)
+    streams = sorted({r.stream for r in records})
+    networks: dict[str, StreamNetwork] = {}
+    priors: dict[str, Prior] = {}
+    fallback: set[str] = set()
+    with torch_threads(TORCH_THREADS):
+        for index, stream in enumerate(streams):
+            ours = [r for r in training if r.stream == stream]
+            total = sum(1 for r in records if r.stream == stream)
+            t = _Targets.of(ours or [r for r in records if r.stream == stream])
+            priors[stream] = Prior.from_outcomes(t.success, t.wall_s, t.execution_s)
+            if total < min_queries or not ours:
+                log.warning(
+                    "stream %s: %d queries (%d for training), fewer than min_queries=%d: "
+                    "its model is the prior (success rate %.2f, mean costs)",
+                    stream,
+                    total,
+                    len(ours),
+                    min_queries,
+                    priors[stream].p_s,
+                )
+                fallback.add(stream)
+                continue
+            networks[stream] = _fit_stream(
+                ours, featurizer, stream, priors[stream], seed=seed * 1000 + index, epochs=epochs
+            )
+            log.info("stream %s: trained on %d queries", stream, len(ours))
+    all_t = _Targets.of(training)
+    default_prior = Prior.from_outcomes(all_t.success, all_t.wall_s, all_t.execution_s)
+    meta: dict[str, Any] = {
+        "runs": len(train_runs) + len(val_runs),
+        "train_runs": len(train_runs),
+        "val_runs": len(val_runs),
+        "queries": len(records),
+        "queries_per_stream": {s: sum(1 for r in records if r.stream == s) for s in streams},
+        "seed": seed,
+        "epochs": epochs,
+        "feature_version": FEATURE_VERSION,
+        "trained_at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "torch": str(torch.__version__),
+        "training": {
+            "val_fraction": val_fraction,
+            "min_queries": min_queries,
+            "learning_rate": LEARNING_RATE,
+            "weight_decay": WEIGHT_DECAY,
+            "unbind_probability": UNBIND_PROBABILITY,
+            "scene_drop_probability": SCENE_DROP_PROBABILITY,
+            "input_noise": INPUT_NOISE,
+        },
+    }
+    if isinstance(records, LoadedRecords):
+        meta["data"] = [str(p) for p in records.sources]
+        meta["scenes"] = sorted(set(records.run_scenes.values()))
+    meta.update(metadata or {})
+    model = CostModel(featurizer, networks, priors, default_prior=default_prior, metadata=meta)
+    reports = []
+    for stream in streams:
+        ours_train = [r for r in training if r.stream == stream]
+        ours_val = [r for r in validation if r.stream == stream]
+        succ = float(np.mean([r.success for r in ours_train])) if ours_train else None
+        moves = any(r.execution_s > 0 for r in ours_train)
+        reports.append(
+            _evaluate(
+                stream,
+                model,
+                ours_val,
+                moves,
+                n_train=len(ours_train),
+                prior_used=stream in fallback,
+                success_rate=succ,
+            )
+        )
+    report = TrainReport(tuple(reports), train_runs, val_runs, seed, epochs)
+    return model, report

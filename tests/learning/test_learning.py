@@ -1,0 +1,368 @@
+"""Features, per-stream cost models and training, on synthetic kitchen-like stream queries with
+rules a model can learn (no recorded database, no simulation)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import torch
+
+from planner.learning.features import FEATURE_VERSION, Featurizer
+from planner.learning.model import CostModel, ModelError
+from planner.learning.train import TrainReport, auc, format_report, split_runs, train
+from planner.store import QueryRecord
+
+PLATFORMS = ("table", "sink", "stove")
+ARM = [0.0, 1.17, -3.34, -2.25, 0.0, -1.7, 0.0]
+
+
+def _pose(x: float, y: float, yaw: float) -> dict[str, Any]:
+    return {"type": "pose", "x": x, "y": y, "z": 0.755, "yaw": yaw}
+
+
+def _grasp(kind: str) -> dict[str, Any]:
+    return {
+        "type": "grasp",
+        "kind": kind,
+        "position": [0.0, 0.0, 0.01],
+        "quat_xyzw": [0.0, 0.7071, 0.0, 0.7071] if kind == "top" else [0.0, 0.0, 0.0, 1.0],
+        "approach": 0.08,
+    }
+
+
+def _conf(x: float, y: float, yaw: float) -> dict[str, Any]:
+    return {"type": "conf", "base": [x, y, yaw], "torso": 0.2, "arm": ARM, "approach_arm": None}
+
+
+class _Runs:
+    """Synthetic runs. Rules: a placement on the stove succeeds iff fewer than 2 blocks are on
+    the stove; IK takes longer the farther the block is from the origin; a motion's execution
+    seconds grow with the base distance; sample-grasp is queried only in a few runs."""
+
+    def __init__(self, n_runs: int, seed: int, *, grasp_runs: int = 5) -> None:
+        self.rng = np.random.default_rng(seed)
+        self.records: list[QueryRecord] = []
+        for r in range(n_runs):
+            self._run(f"run{r:03d}", with_grasps=r < grasp_runs)
+
+    def _add(
+        self, run_id: str, stream: str, inputs: list[Any], ok: bool, wall: float, **kw: Any
+    ) -> None:
+        n = len(self.records)
+        self.records.append(
+            QueryRecord(
+                id=n + 1,
+                run_id=run_id,
+                node_id=n,
+                seq=n,
+                stream=stream,
+                input_names=[f"x{i}" for i in range(len(inputs))],
+                inputs=inputs,
+                success=ok,
+                wall_s=wall,
+                cpu_s=wall,
+                execution_s=kw.get("execution_s", 0.0),
+                error=None,
+                context=kw["context"],
+            )
+        )
+
+    def _run(self, run_id: str, *, with_grasps: bool) -> None:
+        rng = self.rng
+        n_blocks = int(rng.integers(2, 6))
+        blocks = [f"b{i}" for i in range(1, n_blocks + 1)]
+        where = {b: str(rng.choice(PLATFORMS)) for b in blocks}
+        poses = {}
+        for b in blocks:
+            x, y = rng.uniform(-1.5, 1.5, 2)
+            poses[b] = _pose(float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
+        facts = [["at-conf", "q0"], ["can-move"], ["hand-empty"]]
+        facts += [["at-pose", b, f"p0-{b}"] for b in blocks] + [["on", b, where[b]] for b in blocks]
+        context = {
+            "facts": sorted(facts),
+            "values": {f"p0-{b}": poses[b] for b in blocks} | {"q0": _conf(0, 0, 0)},
+        }
+        on_stove = sum(1 for b in blocks if where[b] == "stove")
+        for _ in range(6):
+            b, target = str(rng.choice(blocks)), str(rng.choice(PLATFORMS))
+            ok = target != "stove" or on_stove < 2
+            wall = 1e-4 * rng.uniform(0.8, 1.2)
+            self._add(run_id, "sample-placement", [b, target], ok, wall, context=context)
+        for _ in range(8):
+            b = str(rng.choice(blocks))
+            dist = math.hypot(poses[b]["x"], poses[b]["y"])
+            ok = bool(rng.random() < 0.6)
+            wall = (0.02 + 0.2 * dist) * rng.uniform(0.95, 1.05) * (1.0 if ok else 0.5)
+            inputs = [b, poses[b], _grasp(str(rng.choice(["top", "side"])))]
+            self._add(run_id, "inverse-kinematics", inputs, ok, wall, context=context)
+        for _ in range(4):
+            q1, q2 = rng.uniform(-2, 2, 3).tolist(), rng.uniform(-2, 2, 3).tolist()
+            moved = 2.0 + 3.0 * math.hypot(q2[0] - q1[0], q2[1] - q1[1])
+            inputs = [_conf(q1[0], q1[1], q1[2]), _conf(q2[0], q2[1], q2[2])]
+            wall = 0.5 * rng.uniform(0.9, 1.1)
+            self._add(run_id, "plan-motion", inputs, True, wall, execution_s=moved, context=context)
+        if with_grasps:
+            self._add(run_id, "sample-grasp", [blocks[0]], True, 5e-5, context=context)
+
+
+@pytest.fixture(scope="module")
+def data() -> list[QueryRecord]:
+    return _Runs(40, seed=1).records
+
+
+@pytest.fixture(scope="module")
+def trained(data: list[QueryRecord]) -> tuple[CostModel, TrainReport]:
+    return train(data, seed=0, epochs=300)
+
+
+# --- features --------------------------------------------------------------------------------
+
+
+def test_rows_have_a_fixed_length_per_stream_and_mask_unbound_inputs(
+    data: list[QueryRecord],
+) -> None:
+    featurizer = Featurizer.fit(data)
+    ik = next(r for r in data if r.stream == "inverse-kinematics")
+    names = featurizer.feature_names("inverse-kinematics")
+    width = featurizer.width("inverse-kinematics")
+    assert len(names) == width
+
+    bound = featurizer.row("inverse-kinematics", ik.inputs, ik.context)
+    unbound = featurizer.row("inverse-kinematics", [ik.inputs[0], ik.inputs[1], None], ik.context)
+    assert bound.shape == unbound.shape == (width,)
+    assert bound.dtype == np.float32
+
+    grasp = [i for i, n in enumerate(names) if n.startswith("in2.")]
+    mask = names.index("in2.unbound")
+    assert bound[mask] == 0.0 and unbound[mask] == 1.0
+    assert not unbound[[i for i in grasp if i != mask]].any()  # an unbound input is zeros
+    assert bound[names.index("in1.unbound")] == unbound[names.index("in1.unbound")] == 0.0
+    # the pose slot: x, y, z, cos yaw, sin yaw
+    pose = ik.inputs[1]
+    start = names.index("in1.unbound") + 1
+    assert bound[start : start + 5] == pytest.approx(
+        [pose["x"], pose["y"], 0.755, math.cos(pose["yaw"]), math.sin(pose["yaw"])], abs=1e-6
+    )
+    # a name outside the vocabulary falls in the unknown bucket
+    odd = featurizer.row("inverse-kinematics", ["b99", None, None], ik.context)
+    assert odd[names.index("in0.is_unknown")] == 1.0
+
+    arity = {"sample-grasp": 1, "sample-placement": 2, "plan-motion": 2}
+    for stream, n in arity.items():
+        row = featurizer.row(stream, [None] * n, {})
+        assert row.shape == (featurizer.width(stream),)
+        assert row.sum() == n  # nothing bound, no scene: only the mask bits are set
+
+
+def test_scene_features_read_the_facts() -> None:
+    featurizer = Featurizer.fit([])
+    context = {
+        "facts": [
+            ["at-pose", "b1", "p1"],
+            ["on", "b1", "stove"],
+            ["on", "b2", "stove"],
+            ["on", "b3", "sink"],
+            ["holding", "b4", "g"],
+        ],
+        "values": {"p1": _pose(0.5, -0.25, 0.0)},
+    }
+    row = featurizer.row("sample-grasp", ["b1"], context)
+    names = featurizer.feature_names("sample-grasp")
+
+    def f(name: str) -> float:
+        return float(row[names.index(name)])
+
+    assert [f("b1.present"), f("b1.on_stove"), f("b1.x"), f("b1.y"), f("b1.cos_yaw")] == [
+        1.0,
+        1.0,
+        0.5,
+        -0.25,
+        1.0,
+    ]
+    assert f("b2.x") == 0.0  # pose not known: zeros
+    assert [f("b4.present"), f("b4.held"), f("b4.on_table")] == [1.0, 1.0, 0.0]
+    assert [f("b5.present"), f("b8.present")] == [0.0, 0.0]  # padded to max_blocks
+    assert (f("n_on_stove"), f("n_on_sink")) == (2.0, 1.0)
+
+
+def test_feature_spec_round_trips_through_a_plain_dict(data: list[QueryRecord]) -> None:
+    featurizer = Featurizer.fit(data)
+    spec = json.loads(json.dumps(featurizer.spec.to_dict()))
+    again = Featurizer.from_spec(spec)
+    assert again.spec == featurizer.spec
+    assert spec["version"] == FEATURE_VERSION and spec["max_blocks"] == 8
+    for r in data[:50]:
+        assert np.array_equal(
+            again.row(r.stream, r.inputs, r.context), featurizer.row(r.stream, r.inputs, r.context)
+        )
+
+
+# --- training --------------------------------------------------------------------------------
+
+
+def test_auc_is_rank_based_with_ties() -> None:
+    assert auc([0, 0, 1, 1], [0.1, 0.4, 0.35, 0.8]) == pytest.approx(0.75)
+    assert auc([0, 1, 0, 1], [0.5, 0.5, 0.5, 0.5]) == pytest.approx(0.5)
+    assert auc([1, 1, 1], [0.2, 0.3, 0.4]) is None
+
+
+def test_learns_the_synthetic_rules_and_beats_the_prior(
+    trained: tuple[CostModel, TrainReport],
+) -> None:
+    _model, report = trained
+    placement = report.stream("sample-placement")
+    assert not placement.prior_used
+    assert placement.auc is not None and placement.auc > 0.9
+    assert placement.log_loss is not None and placement.prior_log_loss is not None
+    assert placement.log_loss < 0.5 * placement.prior_log_loss
+
+    ik = report.stream("inverse-kinematics")  # success is a coin flip: nothing to learn
+    assert ik.auc is not None and 0.3 < ik.auc < 0.7
+    assert ik.mae_r_s is not None and ik.prior_mae_r_s is not None
+    assert ik.mae_r_s < 0.8 * ik.prior_mae_r_s  # wall time grows with distance
+    assert ik.mae_r_f is not None and ik.prior_mae_r_f is not None
+    assert ik.mae_r_f < 0.8 * ik.prior_mae_r_f
+
+    motion = report.stream("plan-motion")
+    assert motion.mae_r_m is not None and motion.prior_mae_r_m is not None
+    assert motion.mae_r_m < 0.5 * motion.prior_mae_r_m
+    assert "sample-placement" in format_report(report)
+    json.dumps(report.to_dict())
+
+
+def test_predictions_are_batched_and_non_negative(
+    trained: tuple[CostModel, TrainReport], data: list[QueryRecord]
+) -> None:
+    model, _ = trained
+    ik = [r for r in data if r.stream == "inverse-kinematics"][:20]
+    rows = model.featurizer.matrix("inverse-kinematics", [(r.inputs, r.context) for r in ik])
+    pred = model.predict("inverse-kinematics", rows)
+    assert len(pred) == 20
+    assert ((pred.p_s > 0) & (pred.p_s < 1)).all()
+    assert (pred.r_s > 0).all() and (pred.r_f > 0).all()
+    assert (pred.r_m == 0).all()  # IK produces no trajectory
+    # unbound pose and grasp (the planner scoring a stream before its inputs exist)
+    unbound = model.predict_queries("inverse-kinematics", [(["b1", None, None], ik[0].context)])
+    assert np.isfinite([unbound.p_s, unbound.r_s, unbound.r_f]).all()
+    # nearer blocks are predicted to be cheaper for IK
+    ctx = ik[0].context
+    near = model.predict_queries("inverse-kinematics", [(["b1", _pose(0.2, 0, 0), None], ctx)])
+    far = model.predict_queries("inverse-kinematics", [(["b1", _pose(1.4, 1.4, 0), None], ctx)])
+    assert far.r_s[0] > near.r_s[0]
+    with pytest.raises(ValueError, match="features"):
+        model.predict("inverse-kinematics", rows[:, :-1])
+
+
+def test_split_is_by_run(trained: tuple[CostModel, TrainReport], data: list[QueryRecord]) -> None:
+    _, report = trained
+    runs = {r.run_id for r in data}
+    assert set(report.train_runs).isdisjoint(report.val_runs)
+    assert set(report.train_runs) | set(report.val_runs) == runs
+    assert len(report.val_runs) == 8  # 20% of 40 runs
+    again = split_runs(runs, val_fraction=0.2, seed=0)
+    assert again == (report.train_runs, report.val_runs)
+    assert split_runs(runs, val_fraction=0.2, seed=1) != again
+    counts = report.stream("inverse-kinematics")
+    assert (counts.n_train, counts.n_val) == (32 * 8, 8 * 8)
+
+
+def test_too_few_queries_gets_the_prior_and_a_warning(caplog: pytest.LogCaptureFixture) -> None:
+    records = _Runs(10, seed=3, grasp_runs=4).records
+    with caplog.at_level(logging.WARNING, logger="planner.learning.train"):
+        model, report = train(records, seed=0, epochs=5, min_queries=30)
+    warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert any("sample-grasp" in m and "min_queries=30" in m for m in warned)
+    assert report.stream("sample-grasp").prior_used
+    assert "sample-grasp" not in model.networks
+    prior = model.priors["sample-grasp"]
+    n = report.stream("sample-grasp").n_train
+    assert n > 0
+    assert prior.p_s == pytest.approx((n + 1) / (n + 2))  # all succeed, Laplace-smoothed
+    rows = np.zeros((3, model.featurizer.width("sample-grasp")), dtype=np.float32)
+    pred = model.predict("sample-grasp", rows)
+    assert pred.p_s.tolist() == [prior.p_s] * 3
+    assert pred.r_s == pytest.approx([5e-5] * 3)
+    other = model.predict("never-seen", np.zeros((2, 7)))
+    assert other.p_s.tolist() == [model.default_prior.p_s] * 2
+
+
+def test_training_is_deterministic_given_the_seed(data: list[QueryRecord]) -> None:
+    small = data[:200]
+    a, _ = train(small, seed=5, epochs=20, min_queries=10)
+    b, _ = train(small, seed=5, epochs=20, min_queries=10)
+    c, _ = train(small, seed=6, epochs=20, min_queries=10)
+    motions = [(r.inputs, r.context) for r in small if r.stream == "plan-motion"]
+    rows = a.featurizer.matrix("plan-motion", motions)
+    assert np.array_equal(a.predict("plan-motion", rows).r_m, b.predict("plan-motion", rows).r_m)
+    assert not np.array_equal(
+        a.predict("plan-motion", rows).r_m, c.predict("plan-motion", rows).r_m
+    )
+
+
+# --- the model file --------------------------------------------------------------------------
+
+
+def test_save_and_load_give_identical_predictions(
+    trained: tuple[CostModel, TrainReport], data: list[QueryRecord], tmp_path: Path
+) -> None:
+    model, _ = trained
+    path = tmp_path / "models" / "kitchen.pt"
+    model.save(path)
+    loaded = CostModel.load(path)
+    assert loaded.streams == model.streams
+    assert loaded.metadata == model.metadata
+    assert loaded.metadata["runs"] == 40 and loaded.metadata["seed"] == 0
+    for stream in model.streams:
+        ours = [(r.inputs, r.context) for r in data if r.stream == stream]
+        rows = model.featurizer.matrix(stream, ours)
+        assert np.array_equal(rows, loaded.featurizer.matrix(stream, ours))
+        before, after = model.predict(stream, rows), loaded.predict(stream, rows)
+        for field in ("p_s", "r_s", "r_f", "r_m"):
+            assert np.array_equal(getattr(before, field), getattr(after, field)), (stream, field)
+
+
+def _rewrite(path: Path, **changes: Any) -> None:
+    payload = torch.load(path, weights_only=True)
+    for key, value in changes.items():
+        if key == "feature_version":
+            payload["feature_spec"]["version"] = value
+        else:
+            payload[key] = value
+    torch.save(payload, path)
+
+
+def test_loading_the_wrong_file_names_the_mismatch(
+    trained: tuple[CostModel, TrainReport], tmp_path: Path
+) -> None:
+    model, _ = trained
+    path = tmp_path / "model.pt"
+    model.save(path)
+    with pytest.raises(ModelError, match="model trained for domain 'kitchen', this is 'line'"):
+        CostModel.load(path, domain="line")
+
+    _rewrite(path, feature_version=FEATURE_VERSION + 1)
+    with pytest.raises(ModelError, match=f"feature version {FEATURE_VERSION + 1}"):
+        CostModel.load(path)
+
+    model.save(path)
+    _rewrite(path, domain="blocksworld")
+    with pytest.raises(ModelError, match="trained for domain 'blocksworld', this is 'kitchen'"):
+        CostModel.load(path)
+
+    missing = tmp_path / "nope.pt"
+    with pytest.raises(ModelError, match=str(missing)):
+        CostModel.load(missing)
+
+    text = tmp_path / "notes.pt"
+    text.write_text("not a model")
+    with pytest.raises(ModelError, match="not a cost-model file"):
+        CostModel.load(text)
+    torch.save({"weights": torch.zeros(3)}, text)
+    with pytest.raises(ModelError, match="not a cost-model file"):
+        CostModel.load(text)
