@@ -62,7 +62,7 @@ def _bindings(
             yield dict(binding)
             return
         atom = order[i]
-        for args in facts.get(atom.predicate, ()):
+        for args in sorted(facts.get(atom.predicate, ())):  # sorted: runs are reproducible
             if len(args) != len(atom.args):
                 continue
             added: list[str] = []

@@ -141,6 +141,7 @@ def plan_abstract(
     request = min(math.ceil(config.k * config.oversample), config.max_requested)
     rounds, t_topk, t_recover = 0, 0.0, 0.0
     previous_unique = 0
+    stale = 0
     stop_reason = "enough"
     while True:
         rounds += 1
@@ -170,7 +171,8 @@ def plan_abstract(
         if result.exhausted or request >= config.max_requested:
             stop_reason = "exhausted" if result.exhausted else "limit"
             break
-        if rounds > 1 and len(unique) <= previous_unique:
+        stale = stale + 1 if rounds > 1 and len(unique) <= previous_unique else 0
+        if stale >= 2:  # two larger requests in a row found nothing new
             stop_reason = "no-new-skeletons"
             log.info("no new skeletons in %d more plans; stopping at %d", request, len(unique))
             break  # a domain with cycles has endless plans but no new stream plans
