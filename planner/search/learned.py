@@ -52,7 +52,7 @@ class Predictor(Protocol):
 
 @dataclass(frozen=True)
 class LearnedConfig:
-    c_explore: float = 0.3  # UCT exploration weight on normalised values (paper: UCT)
+    c_explore: float = 0.05  # UCT exploration weight on normalised values (paper: UCT)
 
 
 @dataclass
@@ -68,6 +68,8 @@ class LearnedPolicy:
     config: LearnedConfig = field(default_factory=LearnedConfig)
     on_prediction: Callable[[Node, StreamCost, float], None] | None = None
     _q: dict[int, float] = field(default_factory=dict)
+    _best: dict[int, float] = field(default_factory=dict)  # lowest Q reached below a node
+    _tree: Tree | None = None
     _scale: float = 0.0
 
     # --- Q of a node -------------------------------------------------------------------------
@@ -106,6 +108,10 @@ class LearnedPolicy:
             self.on_prediction(node, costs[0], q)
         return q
 
+    def _estimate(self, tree: Tree, node: Node) -> float:
+        """The node's Q, or the lowest Q reached below it: progress in a plan counts."""
+        return min(self.q(tree, node), self._best.get(node.id, math.inf))
+
     def _value(self, q: float) -> float:
         return self._scale / (self._scale + q) if self._scale > 0 else 1.0 / (1.0 + q)
 
@@ -121,13 +127,14 @@ class LearnedPolicy:
         return plans_added < plans_total  # only if initial_plans left some closed
 
     def pick_plan(self, tree: Tree) -> Node:
+        self._tree = tree
         root = tree[ROOT]
         plans = [tree[c] for c in root.children]
         if self._scale <= 0:
             self._scale = max(min(self.q(tree, p) for p in plans), 1e-3)
         return max(
             plans,
-            key=lambda n: self._value(self.q(tree, n)) + self._bonus(n.visits, root.visits),
+            key=lambda n: self._value(self._estimate(tree, n)) + self._bonus(n.visits, root.visits),
         )
 
     def expand(self, tree: Tree, node: Node) -> bool:
@@ -141,8 +148,13 @@ class LearnedPolicy:
     def pick_child(self, tree: Tree, node: Node) -> Node:
         return max(
             tree.live_children(node.id),
-            key=lambda c: self._value(self.q(tree, c)) + self._bonus(c.visits, node.visits),
+            key=lambda c: self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits),
         )
 
     def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
+        """Back up the lowest Q a successful query reached to every ancestor."""
+        if leaf.success and self._tree is not None:
+            q = self.q(self._tree, leaf)
+            for i in self._tree.path(leaf.id):
+                self._best[i] = min(self._best.get(i, math.inf), q)
         return 1.0 if leaf.success else 0.0
