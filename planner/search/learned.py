@@ -152,9 +152,11 @@ class LearnedPolicy:
         )
 
     def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
-        """Back up the lowest Q a successful query reached to every ancestor."""
-        if leaf.success and self._tree is not None:
-            q = self.q(self._tree, leaf)
-            for i in self._tree.path(leaf.id):
+        """Back up the lowest Q reached (by the leaf, or before a failed query) to the root."""
+        if self._tree is not None:
+            # A failed query still shows how far the plan got: its parent's Q.
+            reached = leaf if leaf.success or leaf.parent is None else self._tree[leaf.parent]
+            q = self.q(self._tree, reached)
+            for i in self._tree.path(reached.id):
                 self._best[i] = min(self._best.get(i, math.inf), q)
         return 1.0 if leaf.success else 0.0
