@@ -159,7 +159,21 @@ def build_parser() -> argparse.ArgumentParser:
     re.add_argument("--height", type=int, default=720)
 
     sub.add_parser("scenes", help="list the known scenes")
-    sub.add_parser("serve", help="start the dashboard")
+    se = sub.add_parser(
+        "serve",
+        help="start the dashboard",
+        description="Start the dashboard (FastAPI + the viser 3D view). Flags override TAMP_* "
+        "environment variables (docs/dashboard.md).",
+    )
+    se.add_argument("--host", help="address to bind (default 127.0.0.1: this machine only)")
+    se.add_argument("--port", type=int, help="port of the page and API (default 8000)")
+    se.add_argument("--db", help="run store: SQLite path or SQLAlchemy URL (default: tamp plan's)")
+    se.add_argument("--viewer-port", type=int, help="port of the 3D view (default 8080)")
+    se.add_argument("--no-viewer", action="store_true", help="do not start the 3D view")
+    se.add_argument("--max-running", type=int, help="runs planning at once (default 1)")
+    se.add_argument("--max-queued", type=int, help="runs waiting for a slot (default 20)")
+    se.add_argument("--models", type=Path, help="directory of model files offered by name")
+    se.add_argument("--reports", type=Path, help="directory of benchmark reports (*.html)")
     return parser
 
 
@@ -295,8 +309,8 @@ def _print_text(
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from planner.runs import RunConfig, run
-    from planner.store import RunStore, StoreSink, default_db_path
+    from planner.runs import RunConfig, check_plan, record_run, run
+    from planner.store import RunStore, default_db_path
 
     config = RunConfig(
         scene=args.scene,
@@ -307,58 +321,25 @@ def cmd_plan(args: argparse.Namespace) -> int:
         model=args.model,
     )
     problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
-    store = None if args.no_record else RunStore(args.db or default_db_path())
-    run_id: str | None = None
-    sink = None
-    if store is not None:
+    progress = _progress_line()
+    if args.no_record:
+        result, loaded, problem = run(config, progress=progress)
+        valid, message, plan_data = check_plan(result, loaded, problem)
+    else:
+        store = RunStore(args.db or default_db_path())
         run_id = store.create_run(args.scene, args.seed, args.planner, asdict(config))
-        sink = StoreSink(store, run_id)
-    try:
-        result, loaded, problem = run(config, sink=sink, run_id=run_id, progress=_progress_line())
-    except KeyboardInterrupt:
-        if store is not None and run_id is not None and sink is not None:
-            sink.close()
-            store.finish_run(run_id, "cancelled", message="interrupted by the user")
-        raise
-    except Exception as exc:
-        if store is not None and run_id is not None and sink is not None:
-            sink.close()
-            store.finish_run(run_id, "failed", message=f"{type(exc).__name__}: {exc}")
-        raise
+        recorded = record_run(config, store, run_id, progress=progress)
+        store.close()
+        result, valid, message, plan_data = (
+            recorded.result,
+            recorded.valid,
+            recorded.message,
+            recorded.plan,
+        )
     if sys.stderr.isatty():
         sys.stderr.write("\r\033[K")
-    valid: bool | None = None
-    message = f"no plan ({result.status})"
-    plan_data: dict[str, Any] | None = None
-    if result.bound is not None:
-        from planner.domains.kitchen.plan_io import plan_to_dict
-        from planner.domains.kitchen.validate import validate_plan
-
-        if loaded.spec.name != "kitchen":
-            valid, message = True, "solved (validation in simulation is for the kitchen)"
-        else:
-            report = validate_plan(result.bound.skeleton.actions, result.bound.values, problem)
-            valid, message = report.ok, report.message
-            plan_data = plan_to_dict(
-                scene=args.scene,
-                seed=args.seed,
-                actions=result.bound.skeleton.actions,
-                values=result.bound.values,
-            )
-            if args.out is not None:
-                args.out.write_text(json.dumps(plan_data, indent=1) + "\n", encoding="utf-8")
-    if sink is not None and store is not None and run_id is not None:
-        sink.close()
-        store.finish_run(
-            run_id,
-            result.status if valid is not False else "failed",
-            planning_s=result.planning_s,
-            execution_s=result.execution_s,
-            oracle_s=result.oracle_s,
-            queries=len(result.queries),
-            message=message,
-            plan=plan_data,
-        )
+    if plan_data is not None and args.out is not None:
+        args.out.write_text(json.dumps(plan_data, indent=1) + "\n", encoding="utf-8")
     counts = result.query_counts()
     streams = sorted({s for s, _ in counts})
     summary = {
@@ -376,7 +357,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         "nodes": result.nodes,
         "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
         "plan_file": str(args.out) if args.out and plan_data else None,
-        "db": None if store is None else str(args.db or default_db_path()),
+        "db": None if args.no_record else str(args.db or default_db_path()),
     }
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -470,9 +451,29 @@ def cmd_scenes(_: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_serve(_: argparse.Namespace) -> int:
-    # TODO(#6): the FastAPI dashboard.
-    print("dashboard not built yet (it arrives with the dashboard issue); try `tamp abstract`")
+def cmd_serve(args: argparse.Namespace) -> int:
+    from pydantic import ValidationError
+
+    from app.main import serve
+    from app.settings import Settings
+
+    given = {
+        "host": args.host,
+        "port": args.port,
+        "database_url": args.db,
+        "viewer_port": args.viewer_port,
+        "viewer": False if args.no_viewer else None,
+        "max_running": args.max_running,
+        "max_queued": args.max_queued,
+        "model_dir": args.models,
+        "reports_dir": args.reports,
+    }
+    try:
+        settings = Settings(**{k: v for k, v in given.items() if v is not None})
+    except ValidationError as exc:
+        problems = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors())
+        raise ValueError(f"bad dashboard setting: {problems}") from exc
+    serve(settings)
     return 0
 
 

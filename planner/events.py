@@ -124,8 +124,9 @@ class NodeAdded(_EventBase):
     depth: int  # 0 root and stream plans, d >= 1 a result of the plan's d-th stream
     stream: str | None  # the stream queried to make this node; None for the root and plan nodes
     success: bool
-    outputs: list[str]  # names of the objects the query bound
+    outputs: list[Any]  # JSON-encoded values the query bound, one per output name
     label: str  # short text for the dashboard
+    output_names: list[str] = field(default_factory=list)  # the optimistic objects bound
 
     def _validate(self) -> None:
         self._non_negative("node_id", "parent_id")
@@ -139,6 +140,10 @@ class NodeAdded(_EventBase):
             self._fail("stream", f"a node at depth {self.depth} has no stream")
         if self.depth >= 1 and self.stream is None:
             self._fail("stream", f"a node at depth {self.depth} must name its stream")
+        if self.output_names and len(self.output_names) != len(self.outputs):
+            self._fail(
+                "outputs", f"{len(self.outputs)} values for {len(self.output_names)} output names"
+            )
 
 
 @dataclass(frozen=True)
@@ -516,6 +521,107 @@ class FanOutSink:
             sink.close()
         except Exception:
             log.exception("event sink %r failed to close", sink)
+
+
+class BatchingSink:
+    """Hands events to ``write`` in batches, one call per batch, in ``seq`` order.
+
+    ``emit`` only appends to a buffer; the buffer is written when it holds ``batch_size``
+    events, when the run's last event (finished / failed / cancelled) arrives, when its oldest
+    event is ``flush_interval_s`` old (checked on emit and by a background timer, so a long
+    stream query does not hold events back), and on ``close``. A failed write keeps the batch
+    for the next attempt: events are never dropped silently. Subclasses check each event in
+    :meth:`_accept` (called under the buffer lock).
+    """
+
+    def __init__(
+        self,
+        write: Callable[[list[Event]], None],
+        *,
+        name: str = "batching-sink",
+        batch_size: int = 200,
+        flush_interval_s: float | None = 0.5,
+    ) -> None:
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        if flush_interval_s is not None and flush_interval_s <= 0:
+            raise ValueError(f"flush_interval_s must be positive, got {flush_interval_s}")
+        self._write = write
+        self.batch_size = batch_size
+        self.flush_interval_s = flush_interval_s
+        self._buffer: list[Event] = []
+        self._oldest: float | None = None  # perf_counter when the oldest buffered event came
+        self._lock = threading.Lock()  # guards the buffer
+        self._write_lock = threading.Lock()  # one batch at a time, in seq order
+        self._closed = False
+        self._stop = threading.Event()
+        self._timer: threading.Thread | None = None
+        if flush_interval_s is not None:
+            self._timer = threading.Thread(target=self._flush_periodically, name=name, daemon=True)
+            self._timer.start()
+
+    def _accept(self, event: Event) -> None:
+        """Raise if ``event`` does not belong here (called under the buffer lock)."""
+
+    def emit(self, event: Event) -> None:
+        with self._lock:
+            if self._closed:
+                raise RuntimeError(f"{self!r} is closed; event {event.type} #{event.seq} lost")
+            self._accept(event)
+            self._buffer.append(event)
+            now = time.perf_counter()
+            if self._oldest is None:
+                self._oldest = now
+            due = (
+                len(self._buffer) >= self.batch_size
+                or event.type in TERMINAL_TYPES
+                or self._stale(now)
+            )
+        if due:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write everything buffered now."""
+        with self._write_lock:
+            with self._lock:
+                batch, self._buffer = self._buffer, []
+                oldest, self._oldest = self._oldest, None
+            if not batch:
+                return
+            try:
+                self._write(batch)
+            except Exception:
+                with self._lock:  # put the batch back in front, in order, for the next attempt
+                    self._buffer[:0] = batch
+                    self._oldest = oldest
+                raise
+
+    def close(self) -> None:
+        """Stop the timer and write what is left; safe to call twice."""
+        with self._lock:
+            self._closed = True
+        self._stop.set()
+        if self._timer is not None and self._timer is not threading.current_thread():
+            self._timer.join()
+        self.flush()
+
+    def _stale(self, now: float) -> bool:
+        return (
+            self.flush_interval_s is not None
+            and self._oldest is not None
+            and now - self._oldest >= self.flush_interval_s
+        )
+
+    def _flush_periodically(self) -> None:
+        assert self.flush_interval_s is not None
+        while not self._stop.wait(self.flush_interval_s / 2):
+            with self._lock:
+                stale = self._stale(time.perf_counter())
+            if stale:
+                try:
+                    self.flush()
+                except Exception:
+                    log.exception("%r: writing events failed; will retry", self)
 
 
 class Emitter:

@@ -18,8 +18,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from planner.events import Event
-
 log = logging.getLogger(__name__)
 
 
@@ -52,30 +50,10 @@ class TrialResult:
         return out
 
 
-class _TimedSink:
-    """Forwards events to a sink and adds up the seconds spent in it."""
-
-    def __init__(self, inner: Any) -> None:
-        self.inner = inner
-        self.seconds = 0.0
-
-    def emit(self, event: Event) -> None:
-        t = time.perf_counter()
-        self.inner.emit(event)
-        self.seconds += time.perf_counter() - t
-
-    def close(self) -> None:
-        t = time.perf_counter()
-        self.inner.close()
-        self.seconds += time.perf_counter() - t
-
-
 def run_trial(trial: Trial, db: str) -> TrialResult:
     """One recorded run (in the calling process); crashes become failed results."""
-    from planner.domains.kitchen.plan_io import plan_to_dict
-    from planner.domains.kitchen.validate import validate_plan
-    from planner.runs import RunConfig, run
-    from planner.store import RunStore, StoreSink
+    from planner.runs import RunConfig, record_run
+    from planner.store import RunStore
 
     store = RunStore(db)
     config = RunConfig(
@@ -86,52 +64,26 @@ def run_trial(trial: Trial, db: str) -> TrialResult:
         model=trial.model,
     )
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config))
-    sink = _TimedSink(StoreSink(store, run_id))
     try:
-        result, loaded, problem = run(config, sink=sink, run_id=run_id)
+        recorded = record_run(config, store, run_id)
     except Exception as exc:  # a crashed trial is data, not the end of the batch
-        sink.close()
         error = f"{type(exc).__name__}: {exc}"
         log.warning("trial %s seed %d crashed: %s", trial.scene, trial.seed, error)
         log.debug("%s", traceback.format_exc())
-        store.finish_run(run_id, "failed", message=error)
+        return TrialResult(trial, run_id, "failed", None, None, None, None, 0, 0.0, error)
+    finally:
         store.close()
-        return TrialResult(trial, run_id, "failed", None, None, None, None, 0, sink.seconds, error)
-    sink.close()
-    valid: bool | None = None
-    plan = None
-    message = f"no plan ({result.status})"
-    if result.bound is not None and loaded.spec.name == "kitchen":
-        report = validate_plan(result.bound.skeleton.actions, result.bound.values, problem)
-        valid, message = report.ok, report.message
-        plan = plan_to_dict(
-            scene=trial.scene,
-            seed=trial.seed,
-            actions=result.bound.skeleton.actions,
-            values=result.bound.values,
-        )
-    status = result.status if valid is not False else "failed"
-    store.finish_run(
-        run_id,
-        status,
-        planning_s=result.planning_s,
-        execution_s=result.execution_s,
-        oracle_s=result.oracle_s,
-        queries=len(result.queries),
-        message=message,
-        plan=plan,
-    )
-    store.close()
+    result = recorded.result
     return TrialResult(
         trial,
         run_id,
-        status,
-        valid,
+        recorded.status,
+        recorded.valid,
         result.planning_s,
         result.execution_s,
         result.oracle_s,
         len(result.queries),
-        sink.seconds,
+        recorded.record_s,
     )
 
 

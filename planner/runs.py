@@ -14,7 +14,7 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.abstract.skeleton import AbstractPlan
@@ -23,6 +23,7 @@ from planner.events import (
     AbstractPlansFound,
     Emitter,
     EventSink,
+    FanOutSink,
     ListSink,
     ModelPrediction,
     RunCancelled,
@@ -37,6 +38,9 @@ from planner.search.learned import LearnedPolicy, StreamCost
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch
 from planner.search.tree import Node
 from planner.streams.runtime import QueryResult
+
+if TYPE_CHECKING:
+    from planner.store import RunStore
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +73,7 @@ class RunConfig:
 class RunResult:
     run_id: str
     config: RunConfig
-    status: str  # solved, timeout, failed
+    status: str  # solved, timeout, failed, cancelled
     bound: BoundPlan | None
     planning_s: float  # wall seconds from start (top-k included) to the bound plan or the end
     topk_s: float
@@ -127,6 +131,9 @@ def run(
     except Exception as exc:
         emitter.emit(RunFailed, error=f"{type(exc).__name__}: {exc}")
         raise
+    if result.status == "cancelled":
+        emitter.emit(RunCancelled, reason="cancelled by the user")
+        return result, loaded, problem
     emitter.emit(
         RunFinished,
         status=result.status,
@@ -294,3 +301,109 @@ def _sequential(
 def _trajectories(bound: BoundPlan) -> list[Any]:
     used = {a for act in bound.skeleton.actions for a in act.args}
     return [v for k, v in bound.values.items() if k in used and hasattr(v, "segments")]
+
+
+@dataclass(frozen=True)
+class RecordedRun:
+    """A run and what was stored about it: its final status, validation and plan file."""
+
+    result: RunResult
+    loaded: LoadedDomain
+    problem: Problem
+    status: str  # the stored status: the search's, or failed when the plan does not validate
+    valid: bool | None  # None when there is no plan
+    message: str
+    plan: dict[str, Any] | None  # the bound plan file (kitchen) when solved
+    record_s: float  # seconds the planner spent handing events to the store
+
+
+def check_plan(
+    result: RunResult, loaded: LoadedDomain, problem: Problem
+) -> tuple[bool | None, str, dict[str, Any] | None]:
+    """Validate a solved run's plan in simulation (kitchen) and build its plan file."""
+    if result.bound is None:
+        return None, f"no plan ({result.status})", None
+    if loaded.spec.name != "kitchen":
+        return True, "solved (validation in simulation is for the kitchen)", None
+    from planner.domains.kitchen.plan_io import plan_to_dict
+    from planner.domains.kitchen.validate import validate_plan
+
+    report = validate_plan(result.bound.skeleton.actions, result.bound.values, problem)
+    plan = plan_to_dict(
+        scene=result.config.scene,
+        seed=result.config.seed,
+        actions=result.bound.skeleton.actions,
+        values=result.bound.values,
+    )
+    return report.ok, report.message, plan
+
+
+def record_run(
+    config: RunConfig,
+    store: RunStore,
+    run_id: str,
+    *,
+    sinks: tuple[EventSink, ...] = (),
+    progress: Callable[[str], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> RecordedRun:
+    """Run ``config`` as the stored run ``run_id``: every event goes to the store (and to
+    ``sinks``), the plan is validated, and the run is finished in the store however it ends.
+    An exception or Ctrl-C finishes the run as failed / cancelled, keeps its events, and
+    propagates."""
+    from planner.store import StoreSink
+
+    sink = _Tee(StoreSink(store, run_id), FanOutSink(*sinks))
+    try:
+        result, loaded, problem = run(
+            config, sink=sink, run_id=run_id, progress=progress, should_stop=should_stop
+        )
+    except KeyboardInterrupt:
+        sink.close()
+        store.finish_run(run_id, "cancelled", message="interrupted by the user")
+        raise
+    except Exception as exc:
+        sink.close()
+        store.finish_run(run_id, "failed", message=f"{type(exc).__name__}: {exc}")
+        raise
+    sink.close()
+    valid, message, plan = check_plan(result, loaded, problem)
+    if result.status == "cancelled":
+        message = "cancelled by the user"
+    status = result.status if valid is not False else "failed"
+    store.finish_run(
+        run_id,
+        status,
+        planning_s=result.planning_s,
+        execution_s=result.execution_s,
+        oracle_s=result.oracle_s,
+        queries=len(result.queries),
+        message=message,
+        plan=plan,
+    )
+    return RecordedRun(result, loaded, problem, status, valid, message, plan, sink.primary_s)
+
+
+class _Tee:
+    """The store first (its errors propagate: a run that cannot be recorded stops), then the
+    listeners (isolated by a :class:`FanOutSink`)."""
+
+    def __init__(self, primary: EventSink, listeners: FanOutSink) -> None:
+        self.primary = primary
+        self.listeners = listeners
+        self.primary_s = 0.0  # seconds spent in the primary sink
+
+    def emit(self, event: Any) -> None:
+        t = time.perf_counter()
+        self.primary.emit(event)
+        self.primary_s += time.perf_counter() - t
+        if self.listeners.sinks:
+            self.listeners.emit(event)
+
+    def close(self) -> None:
+        t = time.perf_counter()
+        try:
+            self.primary.close()
+        finally:
+            self.primary_s += time.perf_counter() - t
+            self.listeners.close()

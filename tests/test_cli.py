@@ -73,8 +73,13 @@ def test_problem_needs_domain() -> None:
     assert proc.returncode == 2 and "--problem needs --domain" in proc.stderr
 
 
-def test_scenes_and_serve(capsys: pytest.CaptureFixture[str]) -> None:
+def test_scenes(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["scenes"]) == 0
     assert "kitchen-8" in capsys.readouterr().out.split()
-    assert main(["serve"]) == 0
-    assert "dashboard not built yet" in capsys.readouterr().out
+
+
+def test_serve_rejects_bad_settings_before_starting() -> None:
+    proc = run("serve", "--port", "70000", "--no-viewer")
+    assert proc.returncode != 0
+    assert "port" in proc.stderr and "65535" in proc.stderr
+    assert "Traceback" not in proc.stderr

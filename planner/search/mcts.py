@@ -173,8 +173,9 @@ class TreeSearch:
             depth=node.depth,
             stream=stream,
             success=node.success,
-            outputs=[str(self.encode(v)) for v in node.outputs.values()],
+            outputs=[self.encode(v) for v in node.outputs.values()],
             label=self._label(node),
+            output_names=list(node.outputs),
         )
 
     # --- steps -------------------------------------------------------------------------------

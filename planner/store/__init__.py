@@ -2,6 +2,7 @@
 
 from planner.store.db import (
     FINAL_STATUSES,
+    LIVE_STATUSES,
     RUN_STATUSES,
     QueryRecord,
     RunRecord,
@@ -12,6 +13,7 @@ from planner.store.db import (
 
 __all__ = [
     "FINAL_STATUSES",
+    "LIVE_STATUSES",
     "RUN_STATUSES",
     "QueryRecord",
     "RunRecord",

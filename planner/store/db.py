@@ -11,8 +11,6 @@ from __future__ import annotations
 import json
 import logging
 import os
-import threading
-import time
 import uuid
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -40,7 +38,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 from sqlalchemy.pool import StaticPool
 
 from planner.events import (
-    TERMINAL_TYPES,
+    BatchingSink,
     Event,
     StreamQueried,
     event_from_dict,
@@ -49,8 +47,9 @@ from planner.events import (
 
 log = logging.getLogger(__name__)
 
-RUN_STATUSES = ("running", "solved", "failed", "timeout", "cancelled", "interrupted")
-FINAL_STATUSES = RUN_STATUSES[1:]  # what finish_run accepts
+RUN_STATUSES = ("queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted")
+FINAL_STATUSES = RUN_STATUSES[2:]  # what finish_run accepts
+LIVE_STATUSES = RUN_STATUSES[:2]  # not finished yet
 
 
 _dumps = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
@@ -258,8 +257,18 @@ class RunStore:
 
     # runs
 
-    def create_run(self, scene: str, seed: int, planner: str, config: dict[str, Any]) -> str:
-        """Record a new run as ``running``; returns its id."""
+    def create_run(
+        self,
+        scene: str,
+        seed: int,
+        planner: str,
+        config: dict[str, Any],
+        *,
+        status: str = "running",
+    ) -> str:
+        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id."""
+        if status not in LIVE_STATUSES:
+            raise ValueError(f"a new run is queued or running, not {status!r}")
         try:
             config_json = _dumps(config)
         except (TypeError, ValueError) as exc:
@@ -273,7 +282,7 @@ class RunStore:
                     seed=seed,
                     planner=planner,
                     config=config_json,
-                    status="running",
+                    status=status,
                     created_at=datetime.now(UTC),
                     queries=0,
                     message="",
@@ -281,6 +290,31 @@ class RunStore:
             )
         log.debug("created run %s (%s, seed %d, %s)", run_id, scene, seed, planner)
         return run_id
+
+    def start_run(self, run_id: str) -> None:
+        """A queued run starts running."""
+        with self.engine.begin() as conn:
+            current = conn.execute(select(RunRow.status).where(RunRow.id == run_id)).scalar()
+            if current is None:
+                raise _unknown(run_id)
+            if current != "queued":
+                raise ValueError(f"run {run_id} is {current!r}, not queued")
+            conn.execute(update(RunRow).where(RunRow.id == run_id).values(status="running"))
+
+    def count_runs(
+        self, *, status: str | None = None, scene: str | None = None, planner: str | None = None
+    ) -> int:
+        """How many runs :meth:`list_runs` would page through with these filters."""
+        query = select(func.count()).select_from(RunRow)
+        for column, value in (
+            (RunRow.status, status),
+            (RunRow.scene, scene),
+            (RunRow.planner, planner),
+        ):
+            if value is not None:
+                query = query.where(column == value)
+        with self.engine.connect() as conn:
+            return int(conn.execute(query).scalar() or 0)
 
     def finish_run(
         self,
@@ -294,7 +328,7 @@ class RunStore:
         message: str = "",
         plan: dict[str, Any] | None = None,
     ) -> RunRecord:
-        """Record how a running run ended; a run is finished once."""
+        """Record how a queued or running run ended; a run is finished once."""
         if status not in FINAL_STATUSES:
             raise ValueError(
                 f"unknown final status {status!r} (known: {', '.join(FINAL_STATUSES)})"
@@ -305,7 +339,7 @@ class RunStore:
             current = conn.execute(select(RunRow.status).where(RunRow.id == run_id)).scalar()
             if current is None:
                 raise _unknown(run_id)
-            if current != "running":
+            if current not in LIVE_STATUSES:
                 raise ValueError(f"run {run_id} already finished with status {current!r}")
             conn.execute(
                 update(RunRow)
@@ -361,7 +395,7 @@ class RunStore:
         with self.engine.begin() as conn:
             result = conn.execute(
                 update(RunRow)
-                .where(RunRow.status == "running")
+                .where(RunRow.status.in_(LIVE_STATUSES))
                 .values(
                     status="interrupted",
                     finished_at=datetime.now(UTC),
@@ -470,15 +504,9 @@ def _unknown(run_id: str) -> KeyError:
 # --- the sink --------------------------------------------------------------------------------
 
 
-class StoreSink:
-    """Writes one run's events to a :class:`RunStore` in batches, one transaction per batch.
-
-    ``emit`` only appends to a buffer; the buffer is written when it holds ``batch_size``
-    events, when the run's last event (finished / failed / cancelled) arrives, when its oldest
-    event is ``flush_interval_s`` old (checked on emit and by a background timer, so a long
-    stream query does not hold events back), and on ``close``. A failed write keeps the batch
-    for the next attempt: events are never dropped silently.
-    """
+class StoreSink(BatchingSink):
+    """Writes one run's events to a :class:`RunStore` in batches, one transaction per batch
+    (batching rules in :class:`~planner.events.BatchingSink`)."""
 
     def __init__(
         self,
@@ -488,98 +516,32 @@ class StoreSink:
         batch_size: int = 200,
         flush_interval_s: float | None = 0.5,
     ) -> None:
-        if batch_size < 1:
-            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
-        if flush_interval_s is not None and flush_interval_s <= 0:
-            raise ValueError(f"flush_interval_s must be positive, got {flush_interval_s}")
         self.store = store
         self.run_id = run_id
-        self.batch_size = batch_size
-        self.flush_interval_s = flush_interval_s
         self._last_seq = store.last_seq(run_id)  # raises KeyError for an unknown run
-        self._buffer: list[Event] = []
-        self._oldest: float | None = None  # perf_counter when the oldest buffered event came
-        self._lock = threading.Lock()  # guards the buffer
-        self._write_lock = threading.Lock()  # one batch at a time, in seq order
-        self._closed = False
-        self._stop = threading.Event()
-        self._timer: threading.Thread | None = None
-        if flush_interval_s is not None:
-            self._timer = threading.Thread(
-                target=self._flush_periodically, name=f"store-sink-{run_id[:8]}", daemon=True
-            )
-            self._timer.start()
+        super().__init__(
+            self._write_batch,
+            name=f"store-sink-{run_id[:8]}",
+            batch_size=batch_size,
+            flush_interval_s=flush_interval_s,
+        )
 
     def __repr__(self) -> str:
         return f"StoreSink(run_id={self.run_id!r}, batch_size={self.batch_size})"
 
-    def emit(self, event: Event) -> None:
+    def _accept(self, event: Event) -> None:
         if event.run_id != self.run_id:
             raise ValueError(
                 f"event {event.type} #{event.seq} belongs to run {event.run_id!r}, "
                 f"this sink writes run {self.run_id!r}"
             )
-        with self._lock:
-            if self._closed:
-                raise RuntimeError(f"{self!r} is closed; event {event.type} #{event.seq} lost")
-            if event.seq <= self._last_seq:
-                raise ValueError(
-                    f"event {event.type} #{event.seq} of run {self.run_id} comes after "
-                    f"#{self._last_seq}: seq must increase"
-                )
-            self._last_seq = event.seq
-            self._buffer.append(event)
-            now = time.perf_counter()
-            if self._oldest is None:
-                self._oldest = now
-            due = (
-                len(self._buffer) >= self.batch_size
-                or event.type in TERMINAL_TYPES
-                or self._stale(now)
+        if event.seq <= self._last_seq:
+            raise ValueError(
+                f"event {event.type} #{event.seq} of run {self.run_id} comes after "
+                f"#{self._last_seq}: seq must increase"
             )
-        if due:
-            self.flush()
+        self._last_seq = event.seq
 
-    def flush(self) -> None:
-        """Write everything buffered now."""
-        with self._write_lock:
-            with self._lock:
-                batch, self._buffer = self._buffer, []
-                oldest, self._oldest = self._oldest, None
-            if not batch:
-                return
-            try:
-                self.store.write_events(self.run_id, batch)
-            except Exception:
-                with self._lock:  # put the batch back in front, in order, for the next attempt
-                    self._buffer[:0] = batch
-                    self._oldest = oldest
-                raise
-            log.debug("run %s: wrote %d events up to #%d", self.run_id, len(batch), batch[-1].seq)
-
-    def close(self) -> None:
-        """Stop the timer and write what is left; safe to call twice."""
-        with self._lock:
-            self._closed = True
-        self._stop.set()
-        if self._timer is not None and self._timer is not threading.current_thread():
-            self._timer.join()
-        self.flush()
-
-    def _stale(self, now: float) -> bool:
-        return (
-            self.flush_interval_s is not None
-            and self._oldest is not None
-            and now - self._oldest >= self.flush_interval_s
-        )
-
-    def _flush_periodically(self) -> None:
-        assert self.flush_interval_s is not None
-        while not self._stop.wait(self.flush_interval_s / 2):
-            with self._lock:
-                stale = self._stale(time.perf_counter())
-            if stale:
-                try:
-                    self.flush()
-                except Exception:
-                    log.exception("run %s: writing events failed; will retry", self.run_id)
+    def _write_batch(self, batch: list[Event]) -> None:
+        self.store.write_events(self.run_id, batch)
+        log.debug("run %s: wrote %d events up to #%d", self.run_id, len(batch), batch[-1].seq)

@@ -1,0 +1,231 @@
+"""Routes: thin, every decision in :class:`app.services.Dashboard`."""
+
+from __future__ import annotations
+
+import json
+import logging
+from typing import Annotated, Any
+
+from fastapi import APIRouter, HTTPException, Query, Request, WebSocket, WebSocketDisconnect
+from fastapi.concurrency import run_in_threadpool
+
+from app import catalog
+from app.hub import Ended, Lagged
+from app.manager import QueueFullError, RunNotLiveError
+from app.schemas import (
+    EventPage,
+    Health,
+    ModelOut,
+    PlannerName,
+    Report,
+    Run,
+    RunDetail,
+    RunPage,
+    RunRequest,
+    SceneOut,
+    StatusName,
+    ViewerRequest,
+    ViewerState,
+)
+from app.services import Dashboard, RequestError
+from planner.events import event_to_json
+from planner.store import LIVE_STATUSES
+
+log = logging.getLogger(__name__)
+
+router = APIRouter(prefix="/api")
+
+RunId = Annotated[str, "run id"]
+WS_PAGE = 1000  # stored events read per page when a websocket catches up
+
+
+def _dash(request: Request) -> Dashboard:
+    dash: Dashboard = request.app.state.dashboard
+    return dash
+
+
+def _unknown_run(run_id: str) -> HTTPException:
+    return HTTPException(404, detail=f"unknown run {run_id!r}")
+
+
+def _bad(field: str, message: str, where: str = "body") -> HTTPException:
+    return HTTPException(
+        422, detail=[{"loc": [where, field], "msg": message, "type": "value_error"}]
+    )
+
+
+@router.get("/health")
+def health(request: Request) -> Health:
+    dash = _dash(request)
+    running, queued = dash.manager.counts()
+    return Health(
+        status="ok",
+        running=running,
+        queued=queued,
+        viewer_url=dash.viewer.url,
+        database=dash.store.engine.url.render_as_string(hide_password=True),
+    )
+
+
+@router.get("/scenes")
+def scenes() -> list[SceneOut]:
+    return [SceneOut(**vars(s)) for s in catalog.scenes()]
+
+
+@router.get("/models")
+def models(request: Request) -> list[ModelOut]:
+    return [ModelOut(**vars(m)) for m in _dash(request).models.list()]
+
+
+@router.get("/reports")
+def reports(request: Request) -> list[Report]:
+    return [Report(**r) for r in _dash(request).reports()]
+
+
+@router.post("/runs", status_code=202, responses={422: {}, 429: {}})
+def launch(body: RunRequest, request: Request) -> Run:
+    dash = _dash(request)
+    try:
+        record = dash.launch(body.scene, body.planner, body.seed, body.budget_s, body.model, body.k)
+    except RequestError as exc:
+        raise _bad(exc.field, str(exc)) from exc
+    except QueueFullError as exc:
+        raise HTTPException(429, detail=str(exc)) from exc
+    return Run.of(record)
+
+
+@router.get("/runs")
+def list_runs(
+    request: Request,
+    status: StatusName | None = None,
+    scene: Annotated[str | None, Query(max_length=100)] = None,
+    planner: PlannerName | None = None,
+    limit: Annotated[int, Query(ge=1, le=500)] = 50,
+    offset: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
+) -> RunPage:
+    store = _dash(request).store
+    runs = store.list_runs(status=status, scene=scene, planner=planner, limit=limit, offset=offset)
+    total = store.count_runs(status=status, scene=scene, planner=planner)
+    return RunPage(runs=[Run.of(r) for r in runs], total=total, limit=limit, offset=offset)
+
+
+@router.get("/runs/{run_id}", responses={404: {}})
+def get_run(run_id: RunId, request: Request) -> RunDetail:
+    dash = _dash(request)
+    try:
+        record = dash.store.get_run(run_id)
+        last_seq = dash.store.last_seq(run_id)
+    except KeyError as exc:
+        raise _unknown_run(run_id) from exc
+    live = dash.hub.events(run_id, after=last_seq)
+    if live:
+        last_seq = live[-1]["seq"]
+    return RunDetail(
+        **Run.of(record).model_dump(),
+        plan=record.plan,
+        last_seq=last_seq,
+        query_counts=dash.query_counts(run_id),
+    )
+
+
+@router.get("/runs/{run_id}/events", responses={404: {}})
+def get_events(
+    run_id: RunId,
+    request: Request,
+    after: Annotated[int, Query(ge=-1, le=2**31)] = -1,
+    limit: Annotated[int, Query(ge=1, le=5000)] = 1000,
+) -> EventPage:
+    try:
+        events, done = _dash(request).events(run_id, after, limit)
+    except KeyError as exc:
+        raise _unknown_run(run_id) from exc
+    next_after = events[-1]["seq"] if events else after
+    return EventPage(events=events, next_after=next_after, done=done)
+
+
+@router.delete("/runs/{run_id}", status_code=202, responses={404: {}, 409: {}})
+def cancel_run(run_id: RunId, request: Request) -> Run:
+    dash = _dash(request)
+    try:
+        dash.manager.cancel(run_id)
+        return Run.of(dash.store.get_run(run_id))
+    except KeyError as exc:
+        raise _unknown_run(run_id) from exc
+    except RunNotLiveError as exc:
+        raise HTTPException(409, detail=str(exc)) from exc
+
+
+@router.put("/viewer", responses={404: {}})
+def follow(body: ViewerRequest, request: Request) -> ViewerState:
+    dash = _dash(request)
+    try:
+        dash.viewer.follow(body.run_id, body.step)
+    except KeyError as exc:
+        raise _unknown_run(body.run_id) from exc
+    return ViewerState(url=dash.viewer.url, run_id=body.run_id, step=body.step)
+
+
+@router.websocket("/runs/{run_id}/stream")
+async def stream(websocket: WebSocket, run_id: str, after: int = -1) -> None:
+    """Stored events with ``seq > after``, then live ones (docs/dashboard.md)."""
+    dash: Dashboard = websocket.app.state.dashboard
+    await websocket.accept()
+    try:
+        await run_in_threadpool(dash.store.get_run, run_id)
+    except KeyError:
+        await websocket.send_text(_control("error", message=f"unknown run {run_id!r}"))
+        await websocket.close(code=4404)
+        return
+    last = max(after, -1)
+    try:
+        while True:
+            subscribed = dash.hub.subscribe(run_id, last)
+            try:
+                last = await _send_stored(websocket, dash, run_id, last)
+                if subscribed is not None:
+                    for event in subscribed[0]:
+                        if event["seq"] > last:
+                            await websocket.send_text(json.dumps(event))
+                            last = event["seq"]
+                await websocket.send_text(_control("caught_up", seq=last))
+                if subscribed is None:
+                    record = await run_in_threadpool(dash.store.get_run, run_id)
+                    status = record.status if record.status not in LIVE_STATUSES else "unknown"
+                    await websocket.send_text(_control("end", status=status))
+                    await websocket.close()
+                    return
+                sub = subscribed[1]
+                while True:
+                    item = await sub.get()
+                    if isinstance(item, Lagged):
+                        await websocket.send_text(_control("resync", after=last))
+                        break
+                    if isinstance(item, Ended):
+                        await websocket.send_text(_control("end", status=item.status))
+                        await websocket.close()
+                        return
+                    for event in item:
+                        if event["seq"] > last:
+                            await websocket.send_text(json.dumps(event))
+                            last = event["seq"]
+            finally:
+                if subscribed is not None:
+                    dash.hub.unsubscribe(subscribed[1])
+    except WebSocketDisconnect:
+        log.debug("websocket client of run %s left", run_id)
+
+
+async def _send_stored(websocket: WebSocket, dash: Dashboard, run_id: str, after: int) -> int:
+    last = after
+    while True:
+        page = await run_in_threadpool(dash.store.events, run_id, after=last, limit=WS_PAGE)
+        for event in page:
+            await websocket.send_text(event_to_json(event))
+        if page:
+            last = page[-1].seq
+        if len(page) < WS_PAGE:
+            return last
+
+
+def _control(kind: str, **fields: Any) -> str:
+    return json.dumps({"type": "control", "kind": kind, **fields})

@@ -1,0 +1,264 @@
+"""The run manager: runs execute in worker processes, at most ``max_running`` at once, the rest
+queued in order.
+
+Planning is CPU-bound, so each run gets its own (spawned) process and the server stays
+responsive. A worker records its run in the store itself and sends its events through a pipe;
+one reader thread here receives them and hands them to the :class:`~app.hub.EventHub`. A worker
+that dies without saying it is done (killed, crashed) has its run finished here: the events the
+server received but the store lacks are written, a closing event is added, and the run is marked
+failed (or cancelled, when the user asked). Cancelling asks the worker to stop (the search checks
+between iterations) and kills it after ``cancel_grace_s``.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import threading
+import time
+from collections import deque
+from dataclasses import asdict, dataclass, field
+from multiprocessing.connection import Connection, wait
+from multiprocessing.process import BaseProcess
+from multiprocessing.synchronize import Event as MpEvent
+from typing import Any
+
+from app import worker as worker_module
+from app.hub import EventHub
+from planner.events import RunCancelled, RunFailed, event_from_dict, event_to_dict
+from planner.runs import RunConfig
+from planner.store import LIVE_STATUSES, RunStore
+
+log = logging.getLogger(__name__)
+
+
+class QueueFullError(Exception):
+    """More launches than the queue holds."""
+
+
+class RunNotLiveError(Exception):
+    """Cancelling a run that is already finished."""
+
+
+@dataclass
+class _Worker:
+    run_id: str
+    process: BaseProcess
+    conn: Connection
+    stop: MpEvent
+    started: float = field(default_factory=time.monotonic)
+    cancel_at: float | None = None  # monotonic time the user asked to cancel
+    done: bool = False  # the worker said it finished
+
+
+class RunManager:
+    def __init__(
+        self,
+        store: RunStore,
+        database: str,
+        hub: EventHub,
+        *,
+        max_running: int = 1,
+        max_queued: int = 20,
+        cancel_grace_s: float = 10.0,
+    ) -> None:
+        self.store = store
+        self.database = database
+        self.hub = hub
+        self.max_running = max_running
+        self.max_queued = max_queued
+        self.cancel_grace_s = cancel_grace_s
+        self._ctx = multiprocessing.get_context("spawn")
+        self._lock = threading.RLock()
+        self._pending: deque[tuple[str, RunConfig]] = deque()
+        self._workers: dict[str, _Worker] = {}
+        self._closing = False
+        self._reader = threading.Thread(target=self._read, name="run-manager", daemon=True)
+        self._reader.start()
+
+    # --- what the API calls -------------------------------------------------------------------
+
+    def counts(self) -> tuple[int, int]:
+        """(running, queued)."""
+        with self._lock:
+            return len(self._workers), len(self._pending)
+
+    def submit(self, config: RunConfig, config_json: dict[str, Any]) -> str:
+        """Queue a run (recorded as ``queued`` at once); returns its id."""
+        with self._lock:
+            if self._closing:
+                raise QueueFullError("the server is shutting down")
+            free = self.max_running - len(self._workers)
+            if free <= 0 and len(self._pending) >= self.max_queued:
+                raise QueueFullError(
+                    f"{len(self._workers)} runs are running and {len(self._pending)} are queued "
+                    f"(the most this server queues is {self.max_queued}); try again when one "
+                    "finishes, or cancel one"
+                )
+            run_id = self.store.create_run(
+                config.scene, config.seed, config.planner, config_json, status="queued"
+            )
+            self.hub.open(run_id)
+            self._pending.append((run_id, config))
+            self._dispatch()
+        log.info(
+            "run %s queued (%s, seed %d, %s)", run_id, config.scene, config.seed, config.planner
+        )
+        return run_id
+
+    def cancel(self, run_id: str) -> None:
+        """Cancel a queued or running run; :class:`RunNotLiveError` if it is over."""
+        with self._lock:
+            for i, (queued_id, _) in enumerate(self._pending):
+                if queued_id == run_id:
+                    del self._pending[i]
+                    self.store.finish_run(
+                        run_id, "cancelled", message="cancelled before it started"
+                    )
+                    self.hub.end(run_id, "cancelled")
+                    return
+            worker = self._workers.get(run_id)
+            if worker is None:
+                status = self.store.get_run(run_id).status  # KeyError for an unknown run
+                raise RunNotLiveError(f"run {run_id} is already over ({status})")
+            if worker.cancel_at is None:
+                worker.cancel_at = time.monotonic()
+                worker.stop.set()
+                log.info("run %s: cancel requested", run_id)
+
+    def close(self, timeout_s: float = 5.0) -> None:
+        """Stop everything: queued runs are cancelled, running ones asked to stop then killed."""
+        with self._lock:
+            self._closing = True
+            while self._pending:
+                run_id, _ = self._pending.popleft()
+                self.store.finish_run(run_id, "cancelled", message="the server shut down")
+                self.hub.end(run_id, "cancelled")
+            for worker in self._workers.values():
+                worker.stop.set()
+                if worker.cancel_at is None:
+                    worker.cancel_at = time.monotonic()
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            with self._lock:
+                if not self._workers:
+                    break
+            time.sleep(0.05)
+        with self._lock:
+            for worker in list(self._workers.values()):
+                self._kill(worker, "the server shut down")
+        self._reader.join(timeout=2.0)
+
+    # --- workers ------------------------------------------------------------------------------
+
+    def _dispatch(self) -> None:
+        with self._lock:
+            while self._pending and len(self._workers) < self.max_running and not self._closing:
+                run_id, config = self._pending.popleft()
+                self.store.start_run(run_id)
+                receive, send = self._ctx.Pipe(duplex=False)
+                stop = self._ctx.Event()
+                process = self._ctx.Process(
+                    target=worker_module.main,
+                    args=(run_id, asdict(config), self.database, send, stop),
+                    name=f"run-{run_id[:8]}",
+                    daemon=True,
+                )
+                process.start()
+                send.close()  # the worker holds the other end; EOF here means it is gone
+                self._workers[run_id] = _Worker(run_id, process, receive, stop)
+                log.info("run %s started in process %s", run_id, process.pid)
+
+    def _read(self) -> None:
+        while True:
+            with self._lock:
+                if self._closing and not self._workers:
+                    return
+                conns = {w.conn: w for w in self._workers.values()}
+            if not conns:
+                time.sleep(0.05)
+                continue
+            for conn in wait(list(conns), timeout=0.2):
+                worker = conns[conn]  # type: ignore[index]
+                try:
+                    kind, run_id, payload = worker.conn.recv()
+                except (EOFError, OSError):
+                    self._ended(worker)
+                    continue
+                except Exception:
+                    log.exception("run %s: unreadable message from its worker", worker.run_id)
+                    continue
+                if kind == "events":
+                    self.hub.publish(run_id, payload)
+                elif kind == "done":
+                    worker.done = True
+            self._check_cancels()
+
+    def _check_cancels(self) -> None:
+        now = time.monotonic()
+        with self._lock:
+            late = [
+                w
+                for w in self._workers.values()
+                if w.cancel_at is not None and now - w.cancel_at > self.cancel_grace_s
+            ]
+        for worker in late:
+            log.warning(
+                "run %s did not stop within %.0f s; killing it", worker.run_id, self.cancel_grace_s
+            )
+            self._kill(worker, "cancelled by the user (stopped by force)")
+
+    def _kill(self, worker: _Worker, reason: str) -> None:
+        if worker.process.is_alive():
+            worker.process.terminate()
+            worker.process.join(timeout=2.0)
+            if worker.process.is_alive():
+                worker.process.kill()
+        self._ended(worker, reason=reason)
+
+    def _ended(self, worker: _Worker, *, reason: str | None = None) -> None:
+        with self._lock:
+            if self._workers.pop(worker.run_id, None) is None:
+                return
+        worker.process.join(timeout=5.0)
+        worker.conn.close()
+        run_id = worker.run_id
+        try:
+            record = self.store.get_run(run_id)
+            status = record.status
+            if status in LIVE_STATUSES:  # the worker died before finishing its run
+                cancelled = worker.cancel_at is not None
+                status = "cancelled" if cancelled else "failed"
+                message = reason or (
+                    "cancelled by the user"
+                    if cancelled
+                    else f"the worker process died (exit code {worker.process.exitcode})"
+                )
+                self._save_missing_events(run_id, status, message)
+                self.store.finish_run(run_id, status, message=message)
+        except Exception:
+            log.exception("run %s: could not record how it ended", run_id)
+            status = "failed"
+        self.hub.end(run_id, status)
+        log.info("run %s ended: %s", run_id, status)
+        self._dispatch()
+
+    def _save_missing_events(self, run_id: str, status: str, message: str) -> None:
+        """Write what the server received but the store lacks, then a closing event."""
+        stored = self.store.last_seq(run_id)
+        missing = [event_from_dict(e) for e in self.hub.events(run_id, after=stored) or []]
+        if missing:
+            self.store.write_events(run_id, missing)
+        if not missing and stored >= 0:
+            missing_or_last = self.store.events(run_id, after=stored - 1)
+        else:
+            missing_or_last = missing
+        seq = stored + len(missing) + 1
+        t = missing_or_last[-1].t if missing_or_last else 0.0
+        closing = (
+            RunCancelled(run_id=run_id, seq=seq, t=t, reason=message)
+            if status == "cancelled"
+            else RunFailed(run_id=run_id, seq=seq, t=t, error=message)
+        )
+        self.store.write_events(run_id, [closing])
+        self.hub.publish(run_id, [event_to_dict(closing)])

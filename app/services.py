@@ -1,0 +1,123 @@
+"""The dashboard's logic, behind thin routes: launching and reading runs, catalogs, the view."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from app import catalog
+from app.hub import EventDict, EventHub
+from app.manager import RunManager
+from app.settings import Settings
+from app.viewing import Viewer, ViewerService
+from planner.events import event_to_dict
+from planner.runs import RunConfig
+from planner.store import LIVE_STATUSES, RunRecord, RunStore
+
+log = logging.getLogger(__name__)
+
+
+class RequestError(ValueError):
+    """A request that names something that does not exist or does not fit; ``field`` says
+    which part of the body is wrong."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
+class Dashboard:
+    def __init__(self, settings: Settings, *, viewer: Viewer | None = None) -> None:
+        self.settings = settings
+        self.store = RunStore(settings.database_url)
+        interrupted = self.store.mark_interrupted()
+        if interrupted:
+            log.warning(
+                "%d run(s) left unfinished by an earlier server are now 'interrupted'", interrupted
+            )
+        self.hub = EventHub(client_limit=settings.ws_queue_events)
+        self.models = catalog.Models(settings.model_dir)
+        self.manager = RunManager(
+            self.store,
+            settings.database_url,
+            self.hub,
+            max_running=settings.max_running,
+            max_queued=settings.max_queued,
+            cancel_grace_s=settings.cancel_grace_s,
+        )
+        self.viewer = ViewerService(viewer, self.store, self.hub)
+        self.reports_dir = settings.reports_dir
+
+    def close(self) -> None:
+        self.manager.close()
+        self.viewer.close()
+        self.store.close()
+
+    # --- runs ---------------------------------------------------------------------------------
+
+    def launch(
+        self, scene: str, planner: str, seed: int, budget_s: float, model: str | None, k: int
+    ) -> RunRecord:
+        try:
+            scene_info = catalog.scene(scene)
+        except catalog.UnknownNameError as exc:
+            raise RequestError("scene", str(exc)) from exc
+        model_path: Path | None = None
+        if planner == "learned":
+            name = model or "kitchen"
+            try:
+                model_path = self.models.path(name)
+            except catalog.UnknownNameError as exc:
+                raise RequestError("model", str(exc)) from exc
+            fits = {m.name: m.domain for m in self.models.list()}
+            if fits.get(name) != scene_info.domain:
+                fitting = [n for n, d in fits.items() if d == scene_info.domain]
+                raise RequestError(
+                    "model",
+                    f"model {name!r} is for domain {fits.get(name)!r}, scene {scene!r} is "
+                    f"{scene_info.domain!r} (models for it: {', '.join(fitting) or 'none'})",
+                )
+        elif model is not None:
+            raise RequestError("model", "a model is only used by the learned planner")
+        config = RunConfig(
+            scene=scene,
+            seed=seed,
+            planner=planner,
+            k=k,
+            budget_s=budget_s,
+            model=str(model_path) if model_path is not None else None,
+        )
+        data = asdict(config)
+        if model_path is not None:
+            data["model_name"] = model or "kitchen"
+        run_id = self.manager.submit(config, data)
+        return self.store.get_run(run_id)
+
+    def query_counts(self, run_id: str) -> dict[str, dict[str, int]]:
+        counts: dict[str, dict[str, int]] = {}
+        for q in self.store.stream_queries(run_ids=[run_id]):
+            entry = counts.setdefault(q.stream, {"ok": 0, "failed": 0})
+            entry["ok" if q.success else "failed"] += 1
+        return counts
+
+    def events(self, run_id: str, after: int, limit: int) -> tuple[list[EventDict], bool]:
+        """Events with ``seq > after`` (stored, then those still on their way) and whether the
+        run is over with nothing after them."""
+        record = self.store.get_run(run_id)  # KeyError for an unknown run
+        events = [event_to_dict(e) for e in self.store.events(run_id, after=after, limit=limit)]
+        if len(events) < limit:
+            last = events[-1]["seq"] if events else after
+            events += (self.hub.events(run_id, after=last) or [])[: limit - len(events)]
+        done = record.status not in LIVE_STATUSES and len(events) < limit
+        return events, done
+
+    def reports(self) -> list[dict[str, Any]]:
+        if not self.reports_dir.is_dir():
+            return []
+        return [
+            {"name": p.stem, "url": f"/reports/{p.name}"}
+            for p in sorted(self.reports_dir.glob("*.html"))
+            if catalog.safe_name(p.stem)
+        ]
