@@ -83,10 +83,15 @@ class EventHub:
         self._lock = threading.Lock()
         self._live: dict[str, _Live] = {}
         self._listeners: list[Callable[[str, list[EventDict]], None]] = []
+        self._end_listeners: list[Callable[[str, str], None]] = []
 
     def add_listener(self, listener: Callable[[str, list[EventDict]], None]) -> None:
         """``listener(run_id, events)`` is called in the publishing thread for every batch."""
         self._listeners.append(listener)
+
+    def add_end_listener(self, listener: Callable[[str, str], None]) -> None:
+        """``listener(run_id, status)`` is called when a run ends (the store has all of it)."""
+        self._end_listeners.append(listener)
 
     def open(self, run_id: str) -> None:
         with self._lock:
@@ -121,6 +126,11 @@ class EventHub:
             return
         for sub, loop in live.subscribers.items():
             _call(loop, sub.end, status)
+        for listener in self._end_listeners:
+            try:
+                listener(run_id, status)
+            except Exception:
+                log.exception("end listener %r failed", listener)
 
     def events(self, run_id: str, after: int = -1) -> list[EventDict] | None:
         """The live run's events with ``seq > after``; None when the run is not live."""

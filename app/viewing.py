@@ -43,6 +43,7 @@ class ViewerService:
         if viewer is not None:
             self._thread.start()
             hub.add_listener(self._on_events)
+            hub.add_end_listener(self._on_end)
 
     @property
     def url(self) -> str | None:
@@ -98,6 +99,11 @@ class ViewerService:
                 viewer.extend(fresh)
 
         self._jobs.put(job)
+
+    def _on_end(self, run_id: str, _status: str) -> None:
+        """A followed run is over: show it whole, with its plan to animate when it has one."""
+        if run_id == self.following:
+            self.follow(run_id, None)
 
     def _work(self) -> None:
         while True:

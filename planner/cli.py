@@ -137,6 +137,33 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--db", type=Path, required=True, help="SQLite file to record into")
     co.add_argument("--model", help="model file for --planner learned")
 
+    be = sub.add_parser(
+        "bench",
+        help="paired trials of several planners on the same seeds (the paper's comparison)",
+        description="Run paired trials (same seeds for every planner, interleaved), store every "
+        "run, and resume an interrupted benchmark with --resume. Then: tamp report BENCH_ID.",
+    )
+    be.add_argument("--scene", help="scene name (required unless --resume)")
+    be.add_argument("--planners", default="baseline,learned", help="comma-separated")
+    be.add_argument("--trials", type=int, default=20, help="seeds (default 20)")
+    be.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")
+    be.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
+    be.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
+    be.add_argument("--model", help="model file for the learned planner (default: shipped)")
+    be.add_argument("--db", type=Path, help="run store (default: user data)")
+    be.add_argument("--ray-address", help="run the trials as Ray tasks: ADDRESS, auto, or local")
+    be.add_argument("--resume", metavar="BENCH_ID", help="run the missing trials of a benchmark")
+
+    rp = sub.add_parser(
+        "report",
+        help="report of a benchmark: figures, table, paired improvement",
+        description="Write an HTML report (plotly figures, tables) of a benchmark, or --json.",
+    )
+    rp.add_argument("bench_id", nargs="?", help="benchmark id (default: the latest)")
+    rp.add_argument("--db", type=Path, help="run store (default: user data)")
+    rp.add_argument("--out", type=Path, help="HTML file (default: the dashboard's reports dir)")
+    rp.add_argument("--json", action="store_true", help="print the summary as JSON")
+
     tr = sub.add_parser(
         "train",
         help="train per-stream cost models from recorded stream queries",
@@ -405,6 +432,72 @@ def cmd_collect(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    from planner.bench import make_config, run_bench
+    from planner.experiment import stderr_progress
+    from planner.report import summarize, table_markdown
+    from planner.store import default_db_path
+
+    db = args.db or default_db_path()
+    config = None
+    if args.resume is None:
+        if not args.scene:
+            raise ValueError("--scene is required (or --resume BENCH_ID)")
+        config = make_config(
+            args.scene,
+            args.planners.split(","),
+            trials=args.trials,
+            seed_start=args.seed_start,
+            budget_s=args.budget,
+            model=args.model,
+        )
+    bench_id, results = run_bench(
+        db,
+        config,
+        resume=args.resume,
+        workers=args.workers,
+        ray_address=args.ray_address,
+        progress=stderr_progress,
+    )
+    if sys.stderr.isatty():
+        sys.stderr.write("\n")
+    crashed = [r for r in results if r.error]
+    for r in crashed:
+        print(f"  {r.trial.planner} seed {r.trial.seed} failed: {r.error}")
+    print(table_markdown(summarize(db, bench_id)))
+    print(f"benchmark {bench_id} in {db}; report: tamp report {bench_id} --db {db}")
+    return 0
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from planner.report import render_html, summarize, table_markdown
+    from planner.store import RunStore, default_db_path
+
+    db = args.db or default_db_path()
+    if not Path(db).is_file():
+        raise ValueError(f"no run store at {db}")
+    bench_id = args.bench_id
+    if bench_id is None:
+        with RunStore(db) as store:
+            benches = store.list_benches()
+        if not benches:
+            raise ValueError(f"no benchmarks in {db}; run tamp bench first")
+        bench_id = benches[0].id
+    try:
+        summary = summarize(db, bench_id)
+    except KeyError as exc:  # the message lists the known benchmarks
+        raise ValueError(exc.args[0]) from exc
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    out = args.out or default_db_path().parent / "reports" / f"bench-{bench_id}.html"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(render_html(summary), encoding="utf-8")
+    print(table_markdown(summary))
+    print(f"report written to {out}")
+    return 0
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     from planner.learning.train import format_report, load_records, train
 
@@ -482,6 +575,8 @@ COMMANDS = {
     "plan": cmd_plan,
     "collect": cmd_collect,
     "train": cmd_train,
+    "bench": cmd_bench,
+    "report": cmd_report,
     "validate": cmd_validate,
     "render": cmd_render,
     "scenes": cmd_scenes,

@@ -162,7 +162,7 @@ class NodeVisited(_EventBase):
 class StreamQueried(_EventBase):
     type: ClassVar[str] = "stream_queried"
 
-    node_id: int  # the node whose expansion or simulation made the query
+    node_id: int  # the node the query made (its node_added comes right after this event)
     stream: str
     input_names: list[str]
     inputs: list[Any]  # JSON-encoded input values, one per input name

@@ -1,20 +1,24 @@
-"""Batches of trials: many seeds of one scene, each a recorded run, on a local process pool.
+"""Batches of trials: many seeds of one scene, each a recorded run, on local processes or Ray.
 
 Every trial runs in a fresh worker process (OMPL takes one seed per process, so a trial is
-reproducible from its seed) and writes its events and stream queries into one SQLite store. A
-trial that crashes is recorded as failed with its error, and the batch goes on.
+reproducible from its seed) and writes its events and stream queries into one store. A trial
+that crashes (or whose process dies) is recorded as failed with its error, and the batch goes
+on.
 """
 
 from __future__ import annotations
 
 import logging
+import multiprocessing
 import statistics
 import sys
 import time
 import traceback
+from collections import deque
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
+from multiprocessing.connection import Connection, wait
+from multiprocessing.process import BaseProcess
 from pathlib import Path
 from typing import Any
 
@@ -97,8 +101,18 @@ def run_trials(
     *,
     workers: int = 2,
     progress: Callable[[str], None] | None = None,
+    on_result: Callable[[TrialResult], None] | None = None,
+    ray_address: str | None = None,
 ) -> list[TrialResult]:
-    """Run ``trials`` on a process pool, recording each into ``db``; in completion order."""
+    """Run ``trials``, recording each into ``db``; results in completion order.
+
+    Locally each trial gets a fresh spawned process (at most ``workers`` at once); with
+    ``ray_address`` (an address, ``auto``, or ``local`` for a Ray started here with
+    ``workers`` CPUs) each trial is a Ray task in a fresh worker process. A trial whose
+    process dies is a failed result with the exit code; ``on_result`` sees every result as it
+    comes. On a multi-machine Ray cluster ``db`` must be a database every node reaches
+    (a PostgreSQL URL or a shared file system).
+    """
     from planner.store import RunStore
 
     if workers < 1:
@@ -107,20 +121,111 @@ def run_trials(
     say = progress or (lambda _m: None)
     results: list[TrialResult] = []
     start = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=workers, max_tasks_per_child=1) as pool:
-        futures = [pool.submit(run_trial, t, str(db)) for t in trials]
-        for done, fut in enumerate(as_completed(futures), 1):
-            r = fut.result()
-            results.append(r)
-            elapsed = time.perf_counter() - start
-            solved = [x for x in results if x.status == "solved"]
-            eta = elapsed / done * (len(trials) - done)
-            median = statistics.median(x.planning_s or 0 for x in solved) if solved else 0.0
-            say(
-                f"[{done}/{len(trials)}] solved {len(solved)}, median planning {median:.0f} s, "
-                f"elapsed {_fmt(elapsed)}, about {_fmt(eta)} left"
-            )
+
+    def done(r: TrialResult) -> None:
+        results.append(r)
+        if on_result is not None:
+            on_result(r)
+        elapsed = time.perf_counter() - start
+        solved = [x for x in results if x.status == "solved"]
+        eta = elapsed / len(results) * (len(trials) - len(results))
+        median = statistics.median(x.planning_s or 0 for x in solved) if solved else 0.0
+        say(
+            f"[{len(results)}/{len(trials)}] solved {len(solved)}, median planning "
+            f"{median:.0f} s, elapsed {_fmt(elapsed)}, about {_fmt(eta)} left"
+        )
+
+    if ray_address is None:
+        _run_local(trials, str(db), workers, done)
+    else:
+        _run_ray(trials, str(db), ray_address, workers, done)
     return results
+
+
+def _crashed(trial: Trial, error: str) -> TrialResult:
+    log.warning("trial %s seed %d (%s): %s", trial.scene, trial.seed, trial.planner, error)
+    return TrialResult(trial, None, "failed", None, None, None, None, 0, 0.0, error)
+
+
+def _trial_process(trial: Trial, db: str, conn: Connection) -> None:
+    """Entry point of a local trial process: the result goes back through ``conn``."""
+    logging.basicConfig(level=logging.WARNING)
+    try:
+        result = run_trial(trial, db)
+    except BaseException as exc:  # even Ctrl-C: the parent decides what happens next
+        result = _crashed(trial, f"{type(exc).__name__}: {exc}")
+    conn.send(result)
+    conn.close()
+
+
+def _run_local(
+    trials: Sequence[Trial], db: str, workers: int, done: Callable[[TrialResult], None]
+) -> None:
+    ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: OMPL seeds per process
+    pending = deque(trials)
+    running: dict[Connection, tuple[BaseProcess, Trial]] = {}
+    try:
+        while pending or running:
+            while pending and len(running) < workers:
+                trial = pending.popleft()
+                receive, send = ctx.Pipe(duplex=False)
+                proc: BaseProcess = ctx.Process(
+                    target=_trial_process, args=(trial, db, send), daemon=True
+                )
+                proc.start()
+                send.close()
+                running[receive] = (proc, trial)
+            for conn in wait(list(running), timeout=1.0):
+                assert isinstance(conn, Connection)
+                process, trial = running.pop(conn)
+                try:
+                    result = conn.recv()
+                except (EOFError, OSError):
+                    process.join(timeout=5.0)
+                    result = _crashed(
+                        trial, f"the trial's process died (exit code {process.exitcode})"
+                    )
+                conn.close()
+                process.join(timeout=5.0)
+                done(result)
+    finally:
+        for left, _ in running.values():  # interrupted: stop what still runs
+            left.terminate()
+        for left, _ in running.values():
+            left.join(timeout=5.0)
+
+
+def _run_ray(
+    trials: Sequence[Trial],
+    db: str,
+    address: str,
+    workers: int,
+    done: Callable[[TrialResult], None],
+) -> None:
+    import ray
+
+    started_here = not ray.is_initialized()
+    if started_here:
+        if address == "local":
+            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+        else:
+            ray.init(address=address, log_to_driver=False)
+    try:
+        # A fresh worker process per trial (max_calls=1), no silent retries: a trial runs once.
+        remote = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(run_trial)
+        refs = {remote.remote(t, db): t for t in trials}
+        while refs:
+            ready, _ = ray.wait(list(refs), num_returns=1)
+            for ref in ready:
+                trial = refs.pop(ref)
+                try:
+                    result = ray.get(ref)
+                except Exception as exc:
+                    result = _crashed(trial, f"Ray task failed: {type(exc).__name__}: {exc}")
+                done(result)
+    finally:
+        if started_here:
+            ray.shutdown()
 
 
 def stderr_progress(message: str) -> None:

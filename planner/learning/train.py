@@ -62,16 +62,27 @@ class LoadedRecords(list[QueryRecord]):
         *,
         sources: Sequence[Path] = (),
         run_scenes: Mapping[str, str] | None = None,
+        run_seeds: Mapping[str, int] | None = None,
     ) -> None:
         super().__init__(records)
         self.sources = tuple(sources)
         self.run_scenes = dict(run_scenes or {})
+        self.run_seeds = dict(run_seeds or {})
+
+    def training_seeds(self) -> dict[str, list[int]]:
+        """Scene -> the seeds of its runs (benchmarks must hold these out)."""
+        out: dict[str, set[int]] = {}
+        for run_id, scene in self.run_scenes.items():
+            if run_id in self.run_seeds:
+                out.setdefault(scene, set()).add(self.run_seeds[run_id])
+        return {scene: sorted(seeds) for scene, seeds in sorted(out.items())}
 
 
 def load_records(db_paths: Sequence[Path]) -> LoadedRecords:
     """Every stream query in the given run stores (SQLite files), in stored order."""
     records: list[QueryRecord] = []
     scenes: dict[str, str] = {}
+    seeds: dict[str, int] = {}
     seen: set[tuple[str, int]] = set()
     for raw in db_paths:
         path = Path(raw)
@@ -80,14 +91,17 @@ def load_records(db_paths: Sequence[Path]) -> LoadedRecords:
         with RunStore(path) as store:
             queries = store.stream_queries()
             for run_id in sorted({q.run_id for q in queries}):
-                scenes[run_id] = store.get_run(run_id).scene
+                run = store.get_run(run_id)
+                scenes[run_id], seeds[run_id] = run.scene, run.seed
         for q in queries:
             if (q.run_id, q.seq) in seen:
                 continue  # the same store given twice
             seen.add((q.run_id, q.seq))
             records.append(q)
         log.info("%s: %d stream queries", path, len(queries))
-    return LoadedRecords(records, sources=[Path(p) for p in db_paths], run_scenes=scenes)
+    return LoadedRecords(
+        records, sources=[Path(p) for p in db_paths], run_scenes=scenes, run_seeds=seeds
+    )
 
 
 # --- the report ------------------------------------------------------------------------------
@@ -513,6 +527,7 @@ def train(
     if isinstance(records, LoadedRecords):
         meta["data"] = [str(p) for p in records.sources]
         meta["scenes"] = sorted(set(records.run_scenes.values()))
+        meta["training_seeds"] = records.training_seeds()
     meta.update(metadata or {})
     model = CostModel(featurizer, networks, priors, default_prior=default_prior, metadata=meta)
     reports = []

@@ -27,6 +27,7 @@ from sqlalchemy import (
     String,
     Text,
     create_engine,
+    delete,
     event,
     func,
     insert,
@@ -120,6 +121,39 @@ class QueryRow(Base):
     context: Mapped[str] = mapped_column(Text, default="{}")  # JSON: facts and values seen
 
 
+class BenchRow(Base):
+    """A benchmark: paired trials of several planners on the same seeds (``tamp bench``)."""
+
+    __tablename__ = "benchmarks"
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    status: Mapped[str] = mapped_column(String(16))  # running, done, interrupted
+    config: Mapped[str] = mapped_column(Text)  # JSON: scene, planners, seeds, budget, model ...
+
+
+class BenchTrialRow(Base):
+    """One (seed, planner) trial of a benchmark and how it ended."""
+
+    __tablename__ = "bench_trials"
+
+    bench_id: Mapped[str] = mapped_column(
+        ForeignKey("benchmarks.id", ondelete="CASCADE"), primary_key=True
+    )
+    seed: Mapped[int] = mapped_column(primary_key=True)
+    planner: Mapped[str] = mapped_column(String(100), primary_key=True)
+    run_id: Mapped[str | None] = mapped_column(String(32))
+    status: Mapped[str] = mapped_column(String(16))  # solved, timeout, failed
+    valid: Mapped[bool | None]
+    planning_s: Mapped[float | None]
+    execution_s: Mapped[float | None]
+    oracle_s: Mapped[float | None]
+    queries: Mapped[int] = mapped_column(default=0)
+    error: Mapped[str | None] = mapped_column(Text)
+    finished_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
 # --- records ---------------------------------------------------------------------------------
 
 
@@ -195,6 +229,30 @@ class QueryRecord:
             error=row.error,
             context=json.loads(row.context or "{}"),
         )
+
+
+@dataclass(frozen=True)
+class BenchRecord:
+    id: str
+    created_at: datetime
+    finished_at: datetime | None
+    status: str
+    config: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class BenchTrialRecord:
+    bench_id: str
+    seed: int
+    planner: str
+    run_id: str | None
+    status: str
+    valid: bool | None
+    planning_s: float | None
+    execution_s: float | None
+    oracle_s: float | None
+    queries: int
+    error: str | None
 
 
 # --- the store -------------------------------------------------------------------------------
@@ -449,6 +507,93 @@ class RunStore:
             query = query.where(QueryRow.run_id.in_(run_ids))
         with Session(self.engine) as session:
             return [QueryRecord.from_row(r) for r in session.scalars(query)]
+
+    # benchmarks
+
+    def create_bench(self, config: dict[str, Any]) -> str:
+        bench_id = uuid.uuid4().hex[:12]
+        with self.engine.begin() as conn:
+            conn.execute(
+                insert(BenchRow).values(
+                    id=bench_id,
+                    created_at=datetime.now(UTC),
+                    status="running",
+                    config=_dumps(config),
+                )
+            )
+        return bench_id
+
+    def get_bench(self, bench_id: str) -> BenchRecord:
+        with Session(self.engine) as session:
+            row = session.get(BenchRow, bench_id)
+            if row is None:
+                known = [b.id for b in self.list_benches()]
+                raise KeyError(
+                    f"unknown benchmark {bench_id!r} (known: {', '.join(known[:10]) or 'none'})"
+                )
+            return BenchRecord(
+                row.id,
+                _utc(row.created_at),
+                _utc(row.finished_at) if row.finished_at is not None else None,
+                row.status,
+                json.loads(row.config),
+            )
+
+    def list_benches(self) -> list[BenchRecord]:
+        with Session(self.engine) as session:
+            rows = session.scalars(select(BenchRow).order_by(BenchRow.created_at.desc()))
+            return [
+                BenchRecord(
+                    r.id,
+                    _utc(r.created_at),
+                    _utc(r.finished_at) if r.finished_at is not None else None,
+                    r.status,
+                    json.loads(r.config),
+                )
+                for r in rows
+            ]
+
+    def set_bench_status(self, bench_id: str, status: str) -> None:
+        with self.engine.begin() as conn:
+            conn.execute(
+                update(BenchRow)
+                .where(BenchRow.id == bench_id)
+                .values(
+                    status=status,
+                    finished_at=datetime.now(UTC) if status != "running" else None,
+                )
+            )
+
+    def record_trial(self, trial: BenchTrialRecord) -> None:
+        """Store how one trial ended (a re-run of the same seed and planner replaces it)."""
+        with self.engine.begin() as conn:
+            conn.execute(
+                delete(BenchTrialRow).where(
+                    BenchTrialRow.bench_id == trial.bench_id,
+                    BenchTrialRow.seed == trial.seed,
+                    BenchTrialRow.planner == trial.planner,
+                )
+            )
+            conn.execute(
+                insert(BenchTrialRow).values(
+                    **{k: getattr(trial, k) for k in BenchTrialRecord.__dataclass_fields__},
+                    finished_at=datetime.now(UTC),
+                )
+            )
+
+    def bench_trials(self, bench_id: str) -> list[BenchTrialRecord]:
+        query = (
+            select(BenchTrialRow)
+            .where(BenchTrialRow.bench_id == bench_id)
+            .order_by(BenchTrialRow.seed, BenchTrialRow.planner)
+        )
+        with Session(self.engine) as session:
+            return [
+                BenchTrialRecord(
+                    **{k: getattr(r, k) for k in BenchTrialRecord.__dataclass_fields__}
+                )
+                for r in session.scalars(query)
+            ]
 
     def write_events(self, run_id: str, events: list[Event]) -> None:
         """Insert events of one run (and their stream-query rows) in one transaction."""

@@ -1,0 +1,828 @@
+"""The viser 3D view of a run: the PR2 kitchen, its search tree drawn where it means something,
+and the bound plan played by the robot.
+
+The dashboard server makes one :class:`RunViewer` at start-up and calls it from ordinary threads:
+:meth:`RunViewer.show` resets the view to a run after the first ``k`` events (the page's step),
+:meth:`RunViewer.extend` adds live events of that run. Nothing it is given raises into the caller:
+bad data is logged and skipped. What is drawn (docs/viewer.md):
+
+- the kitchen of the scene file: platforms, blocks at their seeded initial poses, the generated
+  PR2 (``scenes/pr2.urdf`` through :class:`viser.extras.ViserUrdf`) at its start configuration;
+- every successful sample as a ghost where it lies: placements as translucent blocks, grasps as
+  grippers around the block's initial pose, IK results as arrows at the base pose on the floor,
+  motions as the base's path; coloured by the node's predicted cost ``Q`` (green low, red high,
+  grey without a prediction); failed queries as red diamonds where they were about;
+- the tree's shape as a node-link drawing on a panel beyond the table, the solution's branch in
+  blue;
+- once the events hold ``solution_found`` and the run's plan is given, the robot plays the plan in
+  real time (Play/Pause and a time slider in the GUI).
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+import threading
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import viser
+from viser.extras import ViserUrdf
+
+from app.viewer_plan import PlanAnimation, RobotState, plan_animation
+from app.viewer_search import GHOST_KINDS, Ghost, GhostKind, SearchFold, tree_layout
+from planner.domains import problem_for_scene
+from planner.domains.kitchen import ARM, GEOMETRY_KEY
+from planner.domains.kitchen.geometry import KitchenGeometry
+from planner.domains.kitchen.plan_io import PlanFileError
+from planner.domains.kitchen.world import block_pose_to_pose
+from planner.scene import SceneError
+from planner.sim.pr2_model import (
+    ARM_JOINTS,
+    ARMS,
+    FINGER_TRAVEL,
+    GRIPPER_JOINTS,
+    REST_ARM_CONF,
+    ROOT_LINK,
+    TOOL_LINK,
+    TORSO_JOINT,
+    URDF_PATH,
+)
+from planner.sim.transforms import Pose, invert, multiply, planar_pose, to_wxyz
+
+log = logging.getLogger(__name__)
+
+TICK_S = 1 / 20  # the animation and deferred redraws run at 20 Hz
+REDRAW_S = 0.25  # live events are drawn at most this often
+REDRAW_LOAD = 5  # and a redraw that took s seconds waits at least 5 s before the next
+MAX_GHOSTS = 2000  # ghosts drawn per kind (the latest); the GUI says when some are left out
+MAX_MOTIONS = 500  # motion paths drawn (the latest)
+GHOST_OPACITY = 0.45  # translucent placements and grippers
+FAILED_RGB = (230, 20, 20)  # failed queries, in the scene and in the tree drawing
+SOLUTION_RGB = (40, 110, 230)  # the solution's branch in the tree drawing
+ROOT_RGB = (90, 90, 90)  # the tree's root
+PATH_Z = 0.02  # motion paths float this far above the floor
+ARROW_Z = 0.01  # base markers too
+PANEL_GAP = 1.0  # the tree drawing stands this far beyond the farthest fixture, metres
+PANEL_HEIGHT = 1.6  # its height, metres
+PANEL_TOP = 2.3  # the height of its root, metres
+PANEL_MIN_WIDTH = 2.4  # its least width, metres
+MAX_LEVEL_STEP = 0.3  # the most height between tree levels, metres
+SLIDER_STEP = 0.1  # seconds
+
+
+@dataclass(frozen=True)
+class _Panel:
+    """Where the tree drawing stands: a vertical plane facing the robot's start."""
+
+    x: float
+    y_left: float  # the first leaf's y (the panel runs towards -y)
+    width: float
+    top: float
+    height: float
+
+
+class RunViewer:
+    """One viser server showing one run at a time (thread-safe: one internal lock)."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 8080) -> None:
+        self._host = host
+        self._lock = threading.RLock()
+        self._server = viser.ViserServer(host=host, port=port, verbose=False)
+        self._server.scene.set_up_direction("+z")
+        gui = self._server.gui
+        self._status = gui.add_markdown("No run shown yet.")
+        with gui.add_folder("Plan"):
+            self._play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY, disabled=True)
+            self._time = gui.add_slider(
+                "Time (s)", min=0.0, max=1.0, step=SLIDER_STEP, initial_value=0.0, disabled=True
+            )
+            self._plan_note = gui.add_markdown("No plan yet.")
+        self._play.on_click(self._on_play)
+        self._time.on_update(self._on_seek)
+        self._key: tuple[str, int] | None = None  # (scene, seed) whose kitchen is built
+        self._scene = ""
+        self._note = ""  # why there is no 3D view of the scene shown, if there is none
+        self._steps = 0  # events shown of a scene without a 3D view
+        self._geometry: KitchenGeometry | None = None
+        self._panel: _Panel | None = None
+        self._fold: SearchFold | None = None
+        self._robot: _Robot | None = None
+        self._robot_failed = False  # the PR2 model could not be loaded (logged once)
+        self._groups: dict[str, viser.FrameHandle] = {}
+        self._layers: dict[str, viser.SceneNodeHandle] = {}
+        self._blocks: dict[str, viser.BoxHandle] = {}
+        self._shown = _nothing_shown()  # instances drawn per layer, as counts names them
+        self._anim: PlanAnimation | None = None
+        self._plan: Mapping[str, Any] | None = None
+        self._t = 0.0
+        self._playing = False
+        self._dirty = False
+        self._drawn_at = 0.0
+        self._closed = False
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._tick, name="run-viewer", daemon=True)
+        self._thread.start()
+        log.info("3D viewer at %s", self.url)
+
+    # --- public --------------------------------------------------------------------------------
+
+    @property
+    def url(self) -> str:
+        host = "127.0.0.1" if self._host in ("", "0.0.0.0", "::") else self._host
+        return f"http://{host}:{self._server.get_port()}"
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """What the view shows (anything not drawn yet is drawn first): events folded, tree
+        nodes (the root included), failed queries and how many are marked in the scene, ghosts
+        of each kind drawn, ghosts left out by the caps, model predictions, malformed events
+        skipped."""
+        with self._lock:
+            fold = self._fold
+            if fold is None:
+                return {"events": self._steps, "nodes": 0, "failed": 0, "failed_marked": 0}
+            if self._dirty:
+                self._draw()
+            total = sum(len(fold.ghosts[kind]) for kind in GHOST_KINDS)
+            drawn = sum(self._shown[name] for name in _COUNT_NAMES.values())
+            return {
+                "events": fold.events,
+                "nodes": len(fold.nodes),
+                "failed": fold.failed,
+                "predictions": len(fold.q),
+                "skipped": fold.skipped,
+                "hidden": total - drawn,
+                **self._shown,
+            }
+
+    @property
+    def plan_seconds(self) -> float | None:
+        """Duration of the plan being animated (its trajectories' seconds), None without one."""
+        with self._lock:
+            return None if self._anim is None else self._anim.duration
+
+    @property
+    def playhead(self) -> float:
+        """Seconds into the plan the robot is shown at."""
+        with self._lock:
+            return self._t
+
+    def show(
+        self,
+        scene: str,
+        seed: int,
+        events: Sequence[Mapping[str, Any]],
+        plan: Mapping[str, Any] | None,
+    ) -> None:
+        """Reset the view to this run: build the scene (if it changed) and draw the state after
+        exactly ``events`` (the page's current step). ``plan`` is the run's bound plan file dict
+        when solved (else None)."""
+        with self._lock:
+            if self._closed:
+                return
+            try:
+                self._show(scene, seed, events, plan)
+            except Exception:
+                log.exception("viewer: could not show scene %r (seed %r)", scene, seed)
+                self._set_status(f"The 3D view could not show **{scene}**; see the server log.")
+
+    def extend(self, events: Sequence[Mapping[str, Any]]) -> None:
+        """More live events of the run currently shown (appended after the ones already drawn)."""
+        with self._lock:
+            if self._closed or self._key is None:
+                return
+            try:
+                if self._fold is None:
+                    self._steps += len(events)
+                    self._set_status(self._note_text())
+                    return
+                for event in events:
+                    self._fold.fold(event)
+                self._dirty = True
+                if time.perf_counter() - self._drawn_at >= REDRAW_S:
+                    self._draw()
+            except Exception:
+                log.exception("viewer: could not add %d live events", len(events))
+
+    def close(self) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            self._playing = False
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self._server.stop()
+        log.info("3D viewer stopped")
+
+    # --- showing a run -------------------------------------------------------------------------
+
+    def _show(
+        self,
+        scene: str,
+        seed: int,
+        events: Sequence[Mapping[str, Any]],
+        plan: Mapping[str, Any] | None,
+    ) -> None:
+        if (scene, seed) != self._key:
+            self._load(scene, seed)
+        if self._geometry is None:
+            self._steps = len(events)
+            self._set_status(self._note_text())
+            return
+        fold = SearchFold(self._geometry, seed)
+        for event in events:
+            fold.fold(event)
+        self._fold = fold
+        self._set_plan(scene, seed, plan)
+        self._draw()
+
+    def _load(self, scene: str, seed: int) -> None:
+        """Forget what was built and build the kitchen of ``scene`` (or note why there is none)."""
+        for group in self._groups.values():
+            group.remove()
+        self._groups.clear()
+        self._layers.clear()
+        self._blocks.clear()
+        self._shown = _nothing_shown()
+        self._geometry = self._panel = self._fold = self._anim = self._plan = None
+        self._playing = False
+        self._t = 0.0
+        self._update_plan_gui()
+        self._key = (scene, seed)
+        self._scene = scene
+        self._note = ""
+        try:
+            loaded, problem = problem_for_scene(scene, seed=seed)
+            geometry = problem.values.get(GEOMETRY_KEY)
+            if isinstance(geometry, KitchenGeometry):
+                geometry.initial_poses(seed)  # a seed that places no block fails here
+        except (SceneError, OSError, TypeError, ValueError) as exc:
+            log.warning("viewer: no 3D view of scene %r (seed %r): %s", scene, seed, exc)
+            self._note = f"No 3D view: {exc}"
+            self._hide_robot()
+            return
+        if not isinstance(geometry, KitchenGeometry):
+            self._note = f"There is no 3D view for the **{loaded.spec.name}** domain."
+            self._hide_robot()
+            return
+        self._geometry = geometry
+        self._build_kitchen(geometry)
+
+    def _build_kitchen(self, geometry: KitchenGeometry) -> None:
+        scene = self._server.scene
+        for name in ("kitchen", "search", "tree"):
+            self._groups[name] = scene.add_frame(f"/{name}", show_axes=False)
+        xs = [x for p in geometry.platforms for x in p.footprint()[:2]] + [geometry.robot.base[0]]
+        ys = [y for p in geometry.platforms for y in p.footprint()[2:]] + [geometry.robot.base[1]]
+        cx, cy = (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
+        span = max(max(xs) - min(xs), max(ys) - min(ys)) + 3.0
+        scene.add_grid(
+            "/kitchen/floor",
+            width=span + PANEL_GAP * 2,
+            height=span,
+            position=(cx + PANEL_GAP, cy, 0.0),
+            cell_size=0.25,
+            section_size=1.0,
+            plane_color=(236, 236, 232),
+            plane_opacity=0.0,
+        )
+        for plat in geometry.platforms:
+            (px, py), (sx, sy, h) = plat.center, plat.size
+            scene.add_box(
+                f"/kitchen/platforms/{plat.name}",
+                color=_rgb(plat.color),
+                dimensions=(sx, sy, h),
+                position=(px, py, h / 2),
+            )
+            scene.add_label(
+                f"/kitchen/platforms/{plat.name}/label",
+                plat.name,
+                position=(0.0, 0.0, h / 2 + 0.05),
+                font_screen_scale=0.7,
+                anchor="bottom-center",
+            )
+        for block in geometry.blocks:
+            self._blocks[block.name] = scene.add_box(
+                f"/kitchen/blocks/{block.name}",
+                color=_rgb(block.color),
+                dimensions=(block.size,) * 3,
+            )
+        width = max(PANEL_MIN_WIDTH, max(ys) - min(ys))
+        self._panel = _Panel(max(xs) + PANEL_GAP, cy + width / 2, width, PANEL_TOP, PANEL_HEIGHT)
+        camera = self._server.initial_camera
+        camera.position = (min(xs) - 1.9, cy - 1.5, 2.4)
+        camera.look_at = (cx + 0.5, cy, 0.9)
+        if self._robot is None and not self._robot_failed:
+            try:
+                self._robot = _Robot(self._server)
+            except (ImportError, OSError, ValueError) as exc:
+                log.warning("viewer: cannot show the PR2 (%s); showing the kitchen without it", exc)
+                self._robot_failed = True
+        if self._robot is not None:
+            self._robot.frame.visible = True
+        self._pose_robot()
+
+    def _hide_robot(self) -> None:
+        if self._robot is not None:
+            self._robot.frame.visible = False
+
+    def _note_text(self) -> str:
+        return f"**{self._scene}** · {self._steps} events\n\n{self._note}"
+
+    # --- the plan ------------------------------------------------------------------------------
+
+    def _set_plan(self, scene: str, seed: int, plan: Mapping[str, Any] | None) -> None:
+        fold, geometry = self._fold, self._geometry
+        anim: PlanAnimation | None = None
+        if (
+            plan is not None
+            and fold is not None
+            and geometry is not None
+            and fold.solution is not None
+        ):
+            if plan.get("scene", scene) != scene or plan.get("seed", seed) != seed:
+                log.warning(
+                    "viewer: the plan is for %r seed %r, not %r seed %r; not animating it",
+                    plan.get("scene"),
+                    plan.get("seed"),
+                    scene,
+                    seed,
+                )
+            else:
+                try:
+                    anim = plan_animation(plan, geometry, seed)
+                except PlanFileError as exc:
+                    log.warning("viewer: cannot animate the plan: %s", exc)
+        if anim is None or self._anim is None or plan != self._plan:
+            self._t = 0.0
+            self._playing = False
+        self._anim = anim
+        self._plan = plan if anim is not None else None
+        self._update_plan_gui()
+        self._pose_robot()
+
+    def _update_plan_gui(self) -> None:
+        anim = self._anim
+        self._play.disabled = anim is None
+        self._play.label = "Pause" if self._playing else "Play"
+        self._play.icon = viser.Icon.PLAYER_PAUSE if self._playing else viser.Icon.PLAYER_PLAY
+        self._time.disabled = anim is None
+        if anim is None:
+            found = self._fold is not None and self._fold.solution is not None
+            _set_markdown(
+                self._plan_note,
+                "A plan was found; it plays here once its plan file is given."
+                if found
+                else "No plan yet.",
+            )
+            _set_slider(self._time, 0.0)
+            return
+        self._time.max = max(math.ceil(anim.duration / SLIDER_STEP) * SLIDER_STEP, SLIDER_STEP)
+        _set_slider(self._time, min(self._t, anim.duration))
+        _set_markdown(
+            self._plan_note, f"Plan: {anim.duration:.1f} s of motion, played in real time."
+        )
+
+    def _on_play(self, _: viser.GuiEvent[viser.GuiButtonHandle]) -> None:
+        with self._lock:
+            if self._anim is None or self._closed:
+                return
+            if not self._playing and self._t >= self._anim.duration:
+                self._t = 0.0
+            self._playing = not self._playing
+            self._update_plan_gui()
+
+    def _on_seek(self, event: viser.GuiEvent[viser.GuiSliderHandle[float]]) -> None:
+        if event.client is None:  # our own update of the slider
+            return
+        with self._lock:
+            if self._anim is None or self._closed:
+                return
+            self._t = min(max(0.0, float(self._time.value)), self._anim.duration)
+            self._pose_robot()
+
+    def _advance(self, dt: float) -> None:
+        anim = self._anim
+        if anim is None:
+            self._playing = False
+            return
+        self._t = min(self._t + dt, anim.duration)
+        if self._t >= anim.duration:
+            self._playing = False
+            self._update_plan_gui()
+        _set_slider(self._time, round(self._t, 3))
+        self._pose_robot()
+
+    def _tick(self) -> None:
+        last = time.perf_counter()
+        while not self._stop.wait(TICK_S):
+            now = time.perf_counter()
+            with self._lock:
+                if self._closed:
+                    return
+                try:
+                    if self._playing:
+                        self._advance(now - last)
+                    if self._dirty and now - self._drawn_at >= REDRAW_S:
+                        self._draw()
+                except Exception:
+                    log.exception("viewer: the animation or a redraw failed")
+                    self._playing = False
+            last = now
+
+    def _pose_robot(self) -> None:
+        """Put the robot and the blocks where the plan has them at the playhead (or at the
+        start without a plan)."""
+        geometry, robot = self._geometry, self._robot
+        if geometry is None or robot is None:
+            return
+        if self._anim is not None:
+            state = self._anim.state_at(self._t)
+        else:
+            state = RobotState(
+                geometry.robot.base,
+                geometry.robot.torso,
+                REST_ARM_CONF[ARM],
+                None,
+                geometry.initial_poses(self._key[1] if self._key else 0),
+            )
+        # Each finger opens up to FINGER_TRAVEL; holding, they close on the block's faces.
+        gripper = FINGER_TRAVEL
+        if state.held is not None:
+            gripper = min(FINGER_TRAVEL, geometry.block(state.held[0]).size / 2)
+        with self._server.atomic():
+            tool = robot.set(state, gripper=gripper)
+            for name, box in self._blocks.items():
+                if state.held is not None and state.held[0] == name:
+                    pose = multiply(tool, invert(state.held[1].tool_in_block))
+                elif name in state.blocks:
+                    pose = block_pose_to_pose(state.blocks[name])
+                else:
+                    box.visible = False
+                    continue
+                box.position = pose[0]
+                box.wxyz = to_wxyz(pose[1])
+                box.visible = True
+
+    # --- drawing the search --------------------------------------------------------------------
+
+    def _draw(self) -> None:
+        fold = self._fold
+        self._dirty = False
+        start = time.perf_counter()
+        if fold is not None:
+            with self._server.atomic():
+                for kind in GHOST_KINDS:
+                    self._shown[_COUNT_NAMES[kind]] = self._draw_ghosts(fold, kind)
+                self._shown["failed_marked"] = self._draw_failures(fold)
+                self._shown["tree_nodes"] = self._draw_tree(fold)
+            self._set_status(self._status_text(fold))
+            if fold.solution is not None and self._anim is None:
+                self._update_plan_gui()
+        # A big tree takes a while to draw: live redraws then come less often.
+        spent = time.perf_counter() - start
+        self._drawn_at = start + max(0.0, REDRAW_LOAD * spent - REDRAW_S)
+
+    @staticmethod
+    def _drawn(fold: SearchFold, kind: GhostKind) -> list[Ghost]:
+        cap = MAX_MOTIONS if kind == "motion" else MAX_GHOSTS
+        return fold.ghosts[kind][-cap:]
+
+    @staticmethod
+    def _failure_points(fold: SearchFold) -> list[tuple[float, float, float]]:
+        return [f.where for f in fold.failures if f.where is not None][-MAX_GHOSTS:]
+
+    def _draw_ghosts(self, fold: SearchFold, kind: GhostKind) -> int:
+        """Draw the latest ghosts of one kind as one batch; returns how many."""
+        ghosts = self._drawn(fold, kind)
+        name = f"/search/{kind}s"
+        if not ghosts:
+            self._drop(name)
+            return 0
+        colors = fold.colors([g.node_id for g in ghosts])
+        scene = self._server.scene
+        if kind == "motion":
+            segments: list[tuple[tuple[float, float, float], tuple[float, float, float]]] = []
+            seg_colors: list[npt.NDArray[np.uint8]] = []
+            for ghost, color in zip(ghosts, colors, strict=True):
+                pts = [(x, y, PATH_Z) for x, y, _ in ghost.path]
+                if len(pts) == 1:
+                    pts.append((pts[0][0] + 1e-3, pts[0][1], PATH_Z))
+                for a, b in itertools.pairwise(pts):
+                    segments.append((a, b))
+                    seg_colors.append(color)
+            points = np.array(segments, dtype=np.float32)
+            seg_rgb = np.repeat(np.array(seg_colors, dtype=np.uint8)[:, None, :], 2, axis=1)
+            self._layers[name] = scene.add_line_segments(name, points, seg_rgb, thickness=0.012)
+            return len(ghosts)
+        positions = np.array([g.pose[0] for g in ghosts], dtype=np.float32)
+        if kind == "conf":
+            positions[:, 2] = ARROW_Z
+        wxyzs = np.array([to_wxyz(g.pose[1]) for g in ghosts], dtype=np.float32)
+        vertices, faces = _MESHES[kind]
+        scales = (
+            np.array([g.size for g in ghosts], dtype=np.float32) if kind == "placement" else None
+        )
+        self._layers[name] = scene.add_batched_meshes_simple(
+            name,
+            vertices,
+            faces,
+            wxyzs,
+            positions,
+            batched_scales=scales,
+            batched_colors=colors,
+            opacity=GHOST_OPACITY if kind in ("placement", "grasp") else None,
+            side="double",
+            cast_shadow=False,
+            receive_shadow=False,
+        )
+        return len(ghosts)
+
+    def _draw_failures(self, fold: SearchFold) -> int:
+        points = self._failure_points(fold)
+        name = "/search/failed"
+        if not points:
+            self._drop(name)
+            return 0
+        vertices, faces = _OCTAHEDRON
+        n = len(points)
+        self._layers[name] = self._server.scene.add_batched_meshes_simple(
+            name,
+            vertices,
+            faces,
+            np.tile(np.array([1.0, 0.0, 0.0, 0.0], dtype=np.float32), (n, 1)),
+            np.array(points, dtype=np.float32),
+            batched_colors=FAILED_RGB,
+            cast_shadow=False,
+            receive_shadow=False,
+        )
+        return n
+
+    def _draw_tree(self, fold: SearchFold) -> int:
+        """The tree's node-link drawing on its panel; returns the nodes drawn."""
+        panel = self._panel
+        layout = tree_layout(fold.nodes)
+        names = ("/tree/nodes", "/tree/edges", "/tree/solution", "/tree/title")
+        if panel is None or not layout:
+            for name in names:
+                self._drop(name)
+            return 0
+        ids = list(layout)
+        levels = max(level for _, level in layout.values())
+        step = min(panel.height / max(levels, 1), MAX_LEVEL_STEP)
+        where = {
+            n: (panel.x, panel.y_left - a * panel.width, panel.top - level * step)
+            for n, (a, level) in layout.items()
+        }
+        colors = fold.colors(ids)
+        for i, n in enumerate(ids):
+            node = fold.nodes[n]
+            if not node.success:
+                colors[i] = FAILED_RGB
+            elif node.parent_id is None:
+                colors[i] = ROOT_RGB
+        scene = self._server.scene
+        self._layers["/tree/nodes"] = scene.add_point_cloud(
+            "/tree/nodes",
+            np.array([where[n] for n in ids], dtype=np.float32),
+            colors,
+            point_size=0.035,
+            point_shape="circle",
+            precision="float32",
+        )
+        color_of = dict(zip(ids, colors, strict=True))
+        edges: list[tuple[tuple[float, float, float], tuple[float, float, float], int]] = []
+        for n in ids:
+            parent = fold.nodes[n].parent_id
+            if parent is not None and parent in where:
+                edges.append((where[parent], where[n], n))
+        if edges:
+            self._layers["/tree/edges"] = scene.add_line_segments(
+                "/tree/edges",
+                np.array([(a, b) for a, b, _ in edges], dtype=np.float32),
+                np.array([(color_of[n], color_of[n]) for _, _, n in edges], dtype=np.uint8),
+                thickness=0.006,
+            )
+        else:
+            self._drop("/tree/edges")
+        path = [n for n in fold.solution_path() if n in where]
+        if len(path) > 1:
+            self._layers["/tree/solution"] = scene.add_line_segments(
+                "/tree/solution",
+                np.array([(where[a], where[b]) for a, b in itertools.pairwise(path)]),
+                SOLUTION_RGB,
+                thickness=0.02,
+            )
+        else:
+            self._drop("/tree/solution")
+        self._layers["/tree/title"] = scene.add_label(
+            "/tree/title",
+            f"search tree: {len(fold.nodes)} nodes, {fold.failed} failed",
+            position=(panel.x, panel.y_left - panel.width / 2, panel.top + 0.15),
+            anchor="bottom-center",
+        )
+        return len(ids)
+
+    def _drop(self, name: str) -> None:
+        handle = self._layers.pop(name, None)
+        if handle is not None:
+            handle.remove()
+
+    # --- the GUI text --------------------------------------------------------------------------
+
+    def _status_text(self, fold: SearchFold) -> str:
+        counts = {kind: len(fold.ghosts[kind]) for kind in GHOST_KINDS}
+        drawn = {kind: len(self._drawn(fold, kind)) for kind in GHOST_KINDS}
+        lines = [
+            f"**{self._scene}** · seed {self._key[1] if self._key else 0} · "
+            f"step {fold.events - 1} ({fold.events} events)",
+            f"nodes {len(fold.nodes)} · failed queries {fold.failed} · "
+            f"predictions {len(fold.q)}" + (" · **solved**" if fold.solution is not None else ""),
+            f"ghosts: {counts['placement']} placements, {counts['grasp']} grasps, "
+            f"{counts['conf']} base poses, {counts['motion']} motions",
+        ]
+        left_out = {k: counts[k] - drawn[k] for k in GHOST_KINDS if counts[k] > drawn[k]}
+        if left_out:
+            lines.append(
+                "showing the latest "
+                + ", ".join(f"{drawn[k]} {k}s ({n} older hidden)" for k, n in left_out.items())
+            )
+        q = fold.q_range()
+        scale = (
+            f"predicted cost Q from {q[0]:.1f} s (green) to {q[1]:.1f} s (red)"
+            if q is not None
+            else "grey: no model prediction (the learned planner colours by predicted cost Q)"
+        )
+        lines.append(f"<small>{scale}; red diamond: failed query; blue: solution branch</small>")
+        if fold.skipped:
+            lines.append(f"<small>{fold.skipped} malformed events skipped</small>")
+        return "\n\n".join(lines)
+
+    def _set_status(self, text: str) -> None:
+        _set_markdown(self._status, text)
+
+
+class _Robot:
+    """The generated PR2 in viser: a root frame at the base pose, the URDF's links below it."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        import yourdfpy  # type: ignore[import-untyped]  # ViserUrdf's URDF loader (viser[urdf])
+
+        self._urdf = yourdfpy.URDF.load(str(URDF_PATH))
+        self.frame = server.scene.add_frame("/robot", show_axes=False)
+        self._view = ViserUrdf(server, self._urdf, root_node_name="/robot")
+        self._joints: tuple[str, ...] = tuple(self._urdf.actuated_joint_names)
+        self._rest: dict[str, float] = {
+            joint: value
+            for arm in ARMS
+            if arm != ARM
+            for joint, value in zip(ARM_JOINTS[arm], REST_ARM_CONF[arm], strict=True)
+        }
+
+    def set(self, state: RobotState, *, gripper: float) -> Pose:
+        """Show the robot in ``state``; returns the working arm's tool frame in the world."""
+        cfg = dict(self._rest)
+        cfg[TORSO_JOINT] = state.torso
+        cfg.update(zip(ARM_JOINTS[ARM], state.arm, strict=True))
+        cfg.update((joint, gripper) for joint in GRIPPER_JOINTS[ARM])
+        self._view.update_cfg(np.array([cfg.get(j, 0.0) for j in self._joints]))
+        base = planar_pose(*state.base)
+        self.frame.position = base[0]
+        self.frame.wxyz = to_wxyz(base[1])
+        tool = _pose_from_matrix(
+            np.asarray(self._urdf.get_transform(TOOL_LINK[ARM], ROOT_LINK), dtype=np.float64)
+        )
+        return multiply(base, tool)
+
+
+# --- meshes of the ghosts (vertices, faces), side "double" so winding does not matter ------------
+
+Mesh = tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]
+
+_BOX_FACES = np.array(
+    [
+        (0, 1, 3), (0, 3, 2), (4, 7, 5), (4, 6, 7), (0, 4, 5), (0, 5, 1),
+        (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3),
+    ],
+    dtype=np.uint32,
+)  # fmt: skip
+
+
+def _boxes(*boxes: tuple[tuple[float, float, float], tuple[float, float, float]]) -> Mesh:
+    """One mesh of axis-aligned boxes given as (centre, size)."""
+    vertices: list[tuple[float, float, float]] = []
+    faces: list[npt.NDArray[np.uint32]] = []
+    for (cx, cy, cz), (sx, sy, sz) in boxes:
+        faces.append(_BOX_FACES + len(vertices))
+        vertices += [
+            (cx + dx * sx / 2, cy + dy * sy / 2, cz + dz * sz / 2)
+            for dx in (-1, 1)
+            for dy in (-1, 1)
+            for dz in (-1, 1)
+        ]
+    return np.array(vertices, dtype=np.float32), np.concatenate(faces).astype(np.uint32)
+
+
+def _arrow() -> Mesh:
+    """A flat arrow on the floor along +x from the base's centre: where the robot faces."""
+    outline = [(-0.12, 0.05), (0.10, 0.05), (0.10, 0.10), (0.25, 0.0), (0.10, -0.10), (0.10, -0.05)]
+    outline += [(-0.12, -0.05)]
+    vertices = np.array([(0.0, 0.0, 0.0)] + [(x, y, 0.0) for x, y in outline], dtype=np.float32)
+    n = len(outline)
+    faces = np.array([(0, 1 + i, 1 + (i + 1) % n) for i in range(n)], dtype=np.uint32)
+    return vertices, faces
+
+
+_COUNT_NAMES: dict[GhostKind, str] = {
+    "placement": "placements",
+    "grasp": "grasps",
+    "conf": "confs",
+    "motion": "motions",
+}
+
+
+def _nothing_shown() -> dict[str, int]:
+    return {**dict.fromkeys(_COUNT_NAMES.values(), 0), "failed_marked": 0, "tree_nodes": 0}
+
+
+_OCTAHEDRON: Mesh = (
+    np.array(
+        [(0.04, 0, 0), (-0.04, 0, 0), (0, 0.04, 0), (0, -0.04, 0), (0, 0, 0.05), (0, 0, -0.05)],
+        dtype=np.float32,
+    ),
+    np.array(
+        [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)],
+        dtype=np.uint32,
+    ),
+)
+
+_MESHES: dict[GhostKind, Mesh] = {
+    "placement": _boxes(((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))),  # scaled by the block's edge
+    # The gripper in its tool frame: fingers along +x reaching 3 cm past the tool point.
+    "grasp": _boxes(
+        ((-0.115, 0.0, 0.0), (0.13, 0.10, 0.04)),
+        ((-0.01, 0.045, 0.0), (0.08, 0.012, 0.02)),
+        ((-0.01, -0.045, 0.0), (0.08, 0.012, 0.02)),
+    ),
+    "conf": _arrow(),
+}  # motions are line segments
+
+
+def _set_slider(slider: viser.GuiSliderHandle[float], value: float) -> None:
+    slider.value = value  # type: ignore[misc]  # viser 1.1.1's value setter is hidden from mypy
+
+
+def _set_markdown(handle: viser.GuiMarkdownHandle, text: str) -> None:
+    if handle.content != text:
+        handle.content = text
+
+
+def _rgb(color: Sequence[float]) -> tuple[int, int, int]:
+    return (int(color[0] * 255), int(color[1] * 255), int(color[2] * 255))
+
+
+def _pose_from_matrix(m: npt.NDArray[np.float64]) -> Pose:
+    """A 4x4 homogeneous transform as a (position, xyzw quaternion) pose."""
+    r = m[:3, :3]
+    trace = float(r[0, 0] + r[1, 1] + r[2, 2])
+    if trace > 0:
+        s = math.sqrt(trace + 1.0) * 2
+        w, x, y, z = (
+            0.25 * s,
+            (r[2, 1] - r[1, 2]) / s,
+            (r[0, 2] - r[2, 0]) / s,
+            (r[1, 0] - r[0, 1]) / s,
+        )
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
+        w, x, y, z = (
+            (r[2, 1] - r[1, 2]) / s,
+            0.25 * s,
+            (r[0, 1] + r[1, 0]) / s,
+            (r[0, 2] + r[2, 0]) / s,
+        )
+    elif r[1, 1] > r[2, 2]:
+        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
+        w, x, y, z = (
+            (r[0, 2] - r[2, 0]) / s,
+            (r[0, 1] + r[1, 0]) / s,
+            0.25 * s,
+            (r[1, 2] + r[2, 1]) / s,
+        )
+    else:
+        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
+        w, x, y, z = (
+            (r[1, 0] - r[0, 1]) / s,
+            (r[0, 2] + r[2, 0]) / s,
+            (r[1, 2] + r[2, 1]) / s,
+            0.25 * s,
+        )
+    position = (float(m[0, 3]), float(m[1, 3]), float(m[2, 3]))
+    return position, (float(x), float(y), float(z), float(w))

@@ -1,0 +1,202 @@
+"""Benchmarks: paired trials of several planners on the same seeds, stored and resumable.
+
+``tamp bench`` checks everything before the first trial (scene, planners, budget, trial count,
+that the model fits the scene's domain and never saw the benchmark's seeds), records the
+benchmark, then runs its trials interleaved (per seed, the planners one after the other, their
+order alternating between seeds) so that machine noise hits every planner alike. Each finished
+trial is recorded at once, so ``--resume BENCH_ID`` runs only what is missing.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from planner.domains import problem_for_scene
+from planner.experiment import Trial, TrialResult, run_trials
+from planner.runs import DEFAULT_MODEL, PLANNERS, RunConfig
+from planner.store import BenchTrialRecord, RunStore
+
+log = logging.getLogger(__name__)
+
+MAX_TRIALS = 10_000  # seeds per benchmark
+MAX_BUDGET_S = 3600.0
+
+
+class BenchError(ValueError):
+    """A benchmark that cannot start; the message says which setting is wrong."""
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    scene: str
+    planners: tuple[str, ...]
+    seeds: tuple[int, ...]
+    budget_s: float
+    model: str | None = None  # model file of the learned planner (default: the shipped one)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "scene": self.scene,
+            "planners": list(self.planners),
+            "seeds": list(self.seeds),
+            "budget_s": self.budget_s,
+            "model": self.model,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> BenchConfig:
+        return cls(
+            scene=str(data["scene"]),
+            planners=tuple(data["planners"]),
+            seeds=tuple(int(s) for s in data["seeds"]),
+            budget_s=float(data["budget_s"]),
+            model=data.get("model"),
+        )
+
+
+def make_config(
+    scene: str,
+    planners: Sequence[str],
+    *,
+    trials: int,
+    seed_start: int,
+    budget_s: float,
+    model: str | None = None,
+) -> BenchConfig:
+    """A checked configuration; :class:`BenchError` names what is wrong."""
+    names = tuple(p.strip() for p in planners if p.strip())
+    unknown = [p for p in names if p not in PLANNERS]
+    if not names or unknown:
+        raise BenchError(
+            f"unknown planner(s) {', '.join(map(repr, unknown)) or '(none given)'} "
+            f"(known: {', '.join(PLANNERS)})"
+        )
+    if len(set(names)) != len(names):
+        raise BenchError(f"a planner is listed twice: {', '.join(names)}")
+    if not 1 <= trials <= MAX_TRIALS:
+        raise BenchError(f"--trials must be between 1 and {MAX_TRIALS}, got {trials}")
+    if seed_start < 0:
+        raise BenchError(f"--seed-start must be >= 0, got {seed_start}")
+    if not 0 < budget_s <= MAX_BUDGET_S:
+        raise BenchError(f"--budget must be in (0, {MAX_BUDGET_S:.0f}] seconds, got {budget_s}")
+    if model is not None and "learned" not in names:
+        raise BenchError("--model is only used by the learned planner, which is not listed")
+    if "learned" in names and model is None:
+        model = str(DEFAULT_MODEL)
+    return BenchConfig(
+        scene, names, tuple(range(seed_start, seed_start + trials)), float(budget_s), model
+    )
+
+
+def check(config: BenchConfig) -> dict[str, Any]:
+    """Everything that can fail before a trial starts; returns what the report shows about the
+    model (its file and the seeds that trained it)."""
+    loaded, _ = problem_for_scene(config.scene)  # SceneError for an unknown scene
+    for planner in config.planners:
+        RunConfig(scene=config.scene, planner=planner, budget_s=config.budget_s)
+    info: dict[str, Any] = {"model": None, "training_seeds": None}
+    if "learned" not in config.planners:
+        return info
+    from planner.learning.model import CostModel
+
+    assert config.model is not None
+    model = CostModel.load(config.model, domain=loaded.spec.name)  # ModelError: other domain
+    trained: dict[str, list[int]] | None = model.metadata.get("training_seeds")
+    info = {"model": config.model, "training_seeds": trained}
+    if trained is None:
+        log.warning("model %s does not say which seeds trained it", config.model)
+        return info
+    seen = sorted(set(trained.get(config.scene, ())) & set(config.seeds))
+    if seen:
+        shown = ", ".join(map(str, seen[:10])) + (" ..." if len(seen) > 10 else "")
+        raise BenchError(
+            f"the model {config.model} was trained on {config.scene} seeds {shown}, which this "
+            "benchmark would test on: choose --seed-start beyond its training seeds "
+            f"(it saw {min(trained[config.scene])}-{max(trained[config.scene])})"
+        )
+    return info
+
+
+def trial_order(config: BenchConfig) -> list[Trial]:
+    """Per seed, every planner; the order of planners alternates between seeds."""
+    out = []
+    for i, seed in enumerate(config.seeds):
+        planners = config.planners if i % 2 == 0 else tuple(reversed(config.planners))
+        for planner in planners:
+            model = config.model if planner == "learned" else None
+            out.append(Trial(config.scene, seed, planner, config.budget_s, model))
+    return out
+
+
+def run_bench(
+    db: str | Path,
+    config: BenchConfig | None = None,
+    *,
+    resume: str | None = None,
+    workers: int = 2,
+    ray_address: str | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[str, list[TrialResult]]:
+    """Start a benchmark (``config``) or resume one (``resume``); returns its id and the
+    results of the trials run now."""
+    if (config is None) == (resume is None):
+        raise BenchError("give a benchmark configuration or --resume BENCH_ID, not both")
+    with RunStore(db) as store:
+        if resume is not None:
+            try:
+                previous = store.get_bench(resume)
+            except KeyError as exc:  # the message lists the known benchmarks
+                raise BenchError(exc.args[0]) from exc
+            config = BenchConfig.from_dict(previous.config)
+            bench_id = resume
+            done = {(t.seed, t.planner) for t in store.bench_trials(bench_id)}
+            check(config)  # the scene or the model file may have changed since
+        else:
+            assert config is not None
+            info = check(config)
+            bench_id = store.create_bench(
+                {**config.to_dict(), **info, "workers": workers, "ray_address": ray_address}
+            )
+            done = set()
+        store.set_bench_status(bench_id, "running")
+    todo = [t for t in trial_order(config) if (t.seed, t.planner) not in done]
+    log.info("benchmark %s: %d trials to run (%d done before)", bench_id, len(todo), len(done))
+
+    def save(result: TrialResult) -> None:
+        with RunStore(db) as s:
+            s.record_trial(
+                BenchTrialRecord(
+                    bench_id=bench_id,
+                    seed=result.trial.seed,
+                    planner=result.trial.planner,
+                    run_id=result.run_id,
+                    status=result.status,
+                    valid=result.valid,
+                    planning_s=result.planning_s,
+                    execution_s=result.execution_s,
+                    oracle_s=result.oracle_s,
+                    queries=result.queries,
+                    error=result.error,
+                )
+            )
+
+    try:
+        results = run_trials(
+            todo,
+            db,
+            workers=workers,
+            progress=progress,
+            on_result=save,
+            ray_address=ray_address,
+        )
+    except BaseException:
+        with RunStore(db) as store:
+            store.set_bench_status(bench_id, "interrupted")
+        raise
+    with RunStore(db) as store:
+        store.set_bench_status(bench_id, "done")
+    return bench_id, results

@@ -1,0 +1,339 @@
+"""The report of a benchmark: the paper's Fig. 2 comparison, with honest statistics.
+
+Per trial, total time is planning + execution seconds. A trial that did not solve within its
+budget counts as the budget with no execution ("censored at the budget"): conservative for the
+planner that solves more. The paired improvement of a planner over the reference (the first
+planner of the benchmark, normally the baseline) is ``1 - mean(total) / mean(reference total)``
+over the same seeds, with a 95% interval from resampling seeds (bootstrap).
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+import statistics
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner.store import BenchTrialRecord, RunStore
+
+BOOTSTRAP = 5000  # resamples for the intervals
+MEASURES = ("planning", "execution", "total")
+
+
+def _times(t: BenchTrialRecord, budget: float) -> dict[str, float]:
+    if t.status == "solved" and t.planning_s is not None:
+        execution = t.execution_s or 0.0
+        return {"planning": t.planning_s, "execution": execution, "total": t.planning_s + execution}
+    return {"planning": budget, "execution": 0.0, "total": budget}
+
+
+def _stats(values: Sequence[float]) -> dict[str, float | None]:
+    if not values:
+        return {"mean": None, "median": None}
+    return {"mean": statistics.fmean(values), "median": statistics.median(values)}
+
+
+def _improvement(
+    ours: Sequence[float], reference: Sequence[float], rng: np.random.Generator
+) -> dict[str, float | int | None]:
+    """``1 - mean(ours) / mean(reference)`` over paired seeds, with a bootstrap 95% interval."""
+    n = len(ours)
+    if n == 0 or sum(reference) <= 0:
+        return {"n": n, "mean": None, "low": None, "high": None}
+    a, b = np.asarray(ours), np.asarray(reference)
+    point = 1.0 - a.mean() / b.mean()
+    idx = rng.integers(0, n, size=(BOOTSTRAP, n))
+    samples = 1.0 - a[idx].mean(axis=1) / np.maximum(b[idx].mean(axis=1), 1e-12)
+    low, high = np.percentile(samples, [2.5, 97.5])
+    return {"n": n, "mean": float(point), "low": float(low), "high": float(high)}
+
+
+def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
+    """Everything the report shows, as JSON data (``tamp report --json``)."""
+    with RunStore(db) as store:
+        bench = store.get_bench(bench_id)
+        trials = store.bench_trials(bench_id)
+    config = bench.config
+    planners: list[str] = list(config["planners"])
+    budget = float(config["budget_s"])
+    by: dict[str, dict[int, BenchTrialRecord]] = {p: {} for p in planners}
+    for t in trials:
+        by.setdefault(t.planner, {})[t.seed] = t
+    per_planner: dict[str, Any] = {}
+    for p in planners:
+        ts = list(by[p].values())
+        solved = [t for t in ts if t.status == "solved"]
+        times = [_times(t, budget) for t in solved]
+        ratios = [
+            t.planning_s / t.oracle_s for t in solved if t.planning_s is not None and t.oracle_s
+        ]
+        per_planner[p] = {
+            "trials": len(ts),
+            "solved": len(solved),
+            "solved_fraction": len(solved) / len(ts) if ts else None,
+            "failed": sum(1 for t in ts if t.status == "failed"),
+            "invalid_plans": sum(1 for t in ts if t.valid is False),
+            **{f"{m}_s": _stats([x[m] for x in times]) for m in MEASURES},  # over solved trials
+            "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),
+            "planning_over_oracle": _stats(ratios),
+        }
+    rng = np.random.default_rng(0)
+    reference = planners[0]
+    paired: dict[str, Any] = {}
+    for p in planners[1:]:
+        seeds = sorted(set(by[p]) & set(by[reference]))
+        both = [
+            s for s in seeds if by[p][s].status == "solved" and by[reference][s].status == "solved"
+        ]
+        entry: dict[str, Any] = {"seeds": len(seeds), "both_solved": len(both)}
+        for m in MEASURES:
+            entry[f"{m}_censored"] = _improvement(
+                [_times(by[p][s], budget)[m] for s in seeds],
+                [_times(by[reference][s], budget)[m] for s in seeds],
+                rng,
+            )
+            entry[f"{m}_both_solved"] = _improvement(
+                [_times(by[p][s], budget)[m] for s in both],
+                [_times(by[reference][s], budget)[m] for s in both],
+                rng,
+            )
+        paired[p] = entry
+    rows = [
+        {
+            "seed": s,
+            **{
+                p: {
+                    "status": by[p][s].status if s in by[p] else None,
+                    **(_times(by[p][s], budget) if s in by[p] else {}),
+                    "run_id": by[p][s].run_id if s in by[p] else None,
+                    "error": by[p][s].error if s in by[p] else None,
+                }
+                for p in planners
+            },
+        }
+        for s in sorted({t.seed for t in trials})
+    ]
+    return {
+        "bench_id": bench_id,
+        "status": bench.status,
+        "created_at": bench.created_at.isoformat(timespec="seconds"),
+        "finished_at": bench.finished_at.isoformat(timespec="seconds")
+        if bench.finished_at
+        else None,
+        "wall_s": (bench.finished_at - bench.created_at).total_seconds()
+        if bench.finished_at
+        else None,
+        "config": config,
+        "reference": reference,
+        "planners": per_planner,
+        "paired": paired,
+        "trials": rows,
+    }
+
+
+def _fmt(v: Any, pct: bool = False) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    if pct:
+        return f"{100 * v:.1f}%"
+    return f"{v:.1f}" if isinstance(v, float) else str(v)
+
+
+def table_markdown(summary: dict[str, Any]) -> str:
+    """The per-planner table and the paired improvements, as markdown."""
+    lines = [
+        "| planner | solved | mean / median planning s | mean / median execution s | "
+        "mean / median total s | planning / oracle (median) |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for p, s in summary["planners"].items():
+        lines.append(
+            f"| {p} | {s['solved']}/{s['trials']} | {_fmt(s['planning_s']['mean'])} / "
+            f"{_fmt(s['planning_s']['median'])} | {_fmt(s['execution_s']['mean'])} / "
+            f"{_fmt(s['execution_s']['median'])} | {_fmt(s['total_s']['mean'])} / "
+            f"{_fmt(s['total_s']['median'])} | {_fmt(s['planning_over_oracle']['median'])} |"
+        )
+    for p, e in summary["paired"].items():
+        c, b = e["total_censored"], e["total_both_solved"]
+        lines.append("")
+        lines.append(
+            f"{p} vs {summary['reference']}: mean total time {_fmt(c['mean'], True)} lower "
+            f"(95% CI {_fmt(c['low'], True)} to {_fmt(c['high'], True)}) over {c['n']} paired "
+            f"seeds, unsolved trials counted at the budget; {_fmt(b['mean'], True)} "
+            f"({_fmt(b['low'], True)} to {_fmt(b['high'], True)}) over the {b['n']} seeds both "
+            "solved."
+        )
+    return "\n".join(lines)
+
+
+def render_html(summary: dict[str, Any]) -> str:
+    """A self-contained HTML page (plotly's JS inlined once) with the figures and tables."""
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    planners = list(summary["planners"])
+    reference = summary["reference"]
+    budget = float(summary["config"]["budget_s"])
+    figures: list[Any] = []
+    colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"]
+    for other in planners[1:]:
+        fig = make_subplots(rows=1, cols=3, subplot_titles=[f"{m} (s)" for m in MEASURES])
+        for col, m in enumerate(MEASURES, 1):
+            xs, ys, text, symbols = [], [], [], []
+            for row in summary["trials"]:
+                a, b = row.get(reference, {}), row.get(other, {})
+                if m not in a or m not in b:
+                    continue
+                xs.append(a[m])
+                ys.append(b[m])
+                text.append(f"seed {row['seed']}: {a['status']} / {b['status']}")
+                symbols.append("circle" if a["status"] == b["status"] == "solved" else "x")
+            top = max([*xs, *ys, 1.0])
+            fig.add_trace(
+                go.Scatter(
+                    x=xs,
+                    y=ys,
+                    mode="markers",
+                    text=text,
+                    marker={"symbol": symbols},
+                    name=m,
+                    showlegend=False,
+                ),
+                row=1,
+                col=col,
+            )
+            fig.add_trace(
+                go.Scatter(
+                    x=[0, top],
+                    y=[0, top],
+                    mode="lines",
+                    line={"dash": "dot", "color": "grey"},
+                    showlegend=False,
+                    hoverinfo="skip",
+                ),
+                row=1,
+                col=col,
+            )
+            fig.update_xaxes(title_text=f"{reference} (s)", row=1, col=col)
+            fig.update_yaxes(title_text=f"{other} (s)", row=1, col=col)
+        fig.update_layout(
+            title=f"Per trial: {reference} (x) vs {other} (y); below the diagonal, {other} is "
+            "faster; x marks a trial one of them did not solve (counted at the budget)",
+            height=420,
+        )
+        figures.append(fig)
+    dist = go.Figure()
+    for i, p in enumerate(planners):
+        totals = [row[p]["total"] for row in summary["trials"] if row.get(p, {}).get("total")]
+        dist.add_trace(
+            go.Box(
+                y=totals,
+                name=p,
+                boxpoints="all",
+                jitter=0.4,
+                marker_color=colours[i % len(colours)],
+            )
+        )
+    dist.update_layout(title="Total time per trial (s; unsolved at the budget)", height=420)
+    figures.append(dist)
+    cdf = go.Figure()
+    for i, p in enumerate(planners):
+        done = sorted(
+            row[p]["planning"]
+            for row in summary["trials"]
+            if row.get(p, {}).get("status") == "solved"
+        )
+        n = max(summary["planners"][p]["trials"], 1)
+        cdf.add_trace(
+            go.Scatter(
+                x=[0, *done, budget],
+                y=[0, *[(k + 1) / n for k in range(len(done))], len(done) / n],
+                mode="lines",
+                line={"shape": "hv"},
+                name=p,
+                marker_color=colours[i % len(colours)],
+            )
+        )
+    cdf.update_layout(
+        title="Solved within t seconds of planning (fraction of trials)",
+        xaxis_title="planning seconds",
+        yaxis_title="solved fraction",
+        yaxis_range=[0, 1.02],
+        height=380,
+    )
+    figures.append(cdf)
+    parts = []
+    for i, fig in enumerate(figures):
+        parts.append(fig.to_html(full_html=False, include_plotlyjs="inline" if i == 0 else False))
+    config = summary["config"]
+    trained = config.get("training_seeds")
+    trained_text = (
+        "; ".join(
+            f"{scene}: seeds {min(s)}-{max(s)} ({len(s)} runs)" for scene, s in trained.items()
+        )
+        if trained
+        else "not recorded in the model file"
+        if config.get("model")
+        else "no learned planner"
+    )
+    table = _html_table(summary)
+    seeds = config["seeds"]
+    head = (
+        f"<h1>Benchmark {html.escape(summary['bench_id'])}</h1>"
+        f"<p>{html.escape(config['scene'])}, planners {html.escape(', '.join(planners))}, "
+        f"{len(seeds)} seeds ({min(seeds)}-{max(seeds)}), budget {budget:.0f} s per trial; "
+        f"status {html.escape(summary['status'])}; started {summary['created_at']}"
+        + (f", wall time {summary['wall_s'] / 60:.1f} min" if summary["wall_s"] else "")
+        + "</p>"
+        f"<p>Model: {html.escape(str(config.get('model')))}; it was trained on "
+        f"{html.escape(trained_text)}. The benchmark's seeds were held out.</p>"
+    )
+    return (
+        "<!doctype html><html><head><meta charset='utf-8'><title>guided-tamp benchmark "
+        f"{html.escape(summary['bench_id'])}</title><style>body{{font-family:system-ui,sans-serif;"
+        "margin:2em;max-width:1300px}table{border-collapse:collapse}td,th{border:1px solid #ccc;"
+        "padding:4px 8px;text-align:right}th{background:#f3f3f3}</style></head><body>"
+        + head
+        + table
+        + "".join(parts)
+        + "<details><summary>Data (JSON)</summary><pre>"
+        + html.escape(json.dumps(summary, indent=1))
+        + "</pre></details></body></html>"
+    )
+
+
+def _html_table(summary: dict[str, Any]) -> str:
+    rows = [
+        "<table><tr><th>planner</th><th>solved</th><th>planning s mean / median</th>"
+        "<th>execution s mean / median</th><th>total s mean / median</th>"
+        "<th>planning / oracle (median)</th><th>crashed</th></tr>"
+    ]
+    for p, s in summary["planners"].items():
+        rows.append(
+            f"<tr><td>{html.escape(p)}</td><td>{s['solved']}/{s['trials']}</td>"
+            f"<td>{_fmt(s['planning_s']['mean'])} / {_fmt(s['planning_s']['median'])}</td>"
+            f"<td>{_fmt(s['execution_s']['mean'])} / {_fmt(s['execution_s']['median'])}</td>"
+            f"<td>{_fmt(s['total_s']['mean'])} / {_fmt(s['total_s']['median'])}</td>"
+            f"<td>{_fmt(s['planning_over_oracle']['median'])}</td><td>{s['failed']}</td></tr>"
+        )
+    rows.append("</table>")
+    for p, e in summary["paired"].items():
+        items = []
+        for m in MEASURES:
+            c = e[f"{m}_censored"]
+            items.append(
+                f"<li>{m}: {_fmt(c['mean'], True)} lower (95% CI {_fmt(c['low'], True)} to "
+                f"{_fmt(c['high'], True)}), {c['n']} paired seeds, unsolved at the budget; "
+                f"{_fmt(e[f'{m}_both_solved']['mean'], True)} over the "
+                f"{e[f'{m}_both_solved']['n']} seeds both solved</li>"
+            )
+        rows.append(
+            f"<h3>{html.escape(p)} vs {html.escape(summary['reference'])} (paired mean "
+            f"improvement)</h3><ul>{''.join(items)}</ul>"
+        )
+    return "".join(rows)

@@ -1,0 +1,398 @@
+"""The dashboard page in a real browser against a real ``tamp serve``.
+
+Starts the server on free ports with a temporary database, drives Debian's Chromium through
+Playwright, launches runs from the form and checks what a user sees: the tree growing live, the
+stepper, the node inspector, the charts and the 3D view. Screenshots go to test-artifacts/.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+playwright_api = pytest.importorskip("playwright.sync_api")
+
+pytestmark = pytest.mark.slow
+
+ROOT = Path(__file__).resolve().parents[2]
+ARTIFACTS = ROOT / "test-artifacts"
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--enable-unsafe-swiftshader",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+RUN_TIMEOUT_MS = 240_000  # a kitchen-1 baseline run takes 5-20 s alone; the CI box is shared
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _get(url: str) -> Any:
+    with urllib.request.urlopen(url, timeout=5) as response:
+        return json.load(response)
+
+
+class Server:
+    def __init__(self, url: str, process: subprocess.Popen[bytes], log: Path) -> None:
+        self.url = url
+        self.process = process
+        self.log = log
+
+    def api(self, path: str) -> Any:
+        return _get(self.url + path)
+
+    def events(self, run_id: str) -> list[dict[str, Any]]:
+        events: list[dict[str, Any]] = []
+        after = -1
+        while True:
+            page = self.api(f"/api/runs/{run_id}/events?after={after}&limit=1000")
+            events += page["events"]
+            if not page["events"]:
+                return events
+            after = page["next_after"]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    tmp = tmp_path_factory.mktemp("serve")
+    port, viewer_port = _free_port(), _free_port()
+    tamp = Path(sys.executable).with_name("tamp")
+    log = tmp / "serve.log"
+    command = [str(tamp), "serve", "--host", "127.0.0.1", "--port", str(port)]
+    command += ["--db", str(tmp / "runs.db"), "--viewer-port", str(viewer_port)]
+    reports = tmp / "reports"
+    reports.mkdir()
+    (reports / "bench-demo.html").write_text("<html><body>a benchmark report</body></html>")
+    command += ["--reports", str(reports)]
+    with log.open("wb") as out:
+        process = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, cwd=ROOT)
+    url = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 90
+    while True:
+        if process.poll() is not None:
+            pytest.fail(f"tamp serve exited with {process.returncode}:\n{log.read_text()}")
+        try:
+            _get(url + "/api/health")
+            break
+        except OSError:
+            if time.monotonic() > deadline:
+                process.terminate()
+                pytest.fail(f"tamp serve did not answer /api/health:\n{log.read_text()}")
+            time.sleep(0.2)
+    yield Server(url, process, log)
+    process.terminate()
+    try:
+        process.wait(20)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
+    if not CHROMIUM.exists():
+        pytest.skip(f"no Chromium at {CHROMIUM}")
+    with playwright_api.sync_playwright() as pw:
+        context = pw.chromium.launch_persistent_context(
+            str(tmp_path_factory.mktemp("chromium-profile")),
+            executable_path=str(CHROMIUM),
+            args=CHROMIUM_ARGS,
+            headless=True,
+            viewport={"width": 1440, "height": 1000},
+        )
+        yield context
+        context.close()
+
+
+@pytest.fixture
+def page(browser: Any, server: Server) -> Iterator[Any]:
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.goto(server.url)
+    page.wait_for_function("document.querySelectorAll('#launch-scene option').length > 0")
+    yield page
+    page.close()
+    assert errors == [], f"JavaScript errors on the page: {errors}"
+
+
+def _state(page: Any) -> dict[str, Any]:
+    return dict(page.evaluate("window.dashboard.state()"))
+
+
+def _record_growth(page: Any) -> None:
+    """Keep every node count the page shows, with whether the run was live, in __growth."""
+    page.evaluate(
+        """() => {
+            window.__growth = [];
+            const count = document.getElementById("node-count");
+            new MutationObserver(() => {
+                const s = window.dashboard.state();
+                window.__growth.push({ nodes: Number(count.dataset.nodes), live: s.live });
+            }).observe(count, { attributes: true, attributeFilter: ["data-nodes"] });
+        }"""
+    )
+
+
+def _launch(page: Any, scene: str, planner: str, budget: str = "120") -> str:
+    page.select_option("#launch-scene", scene)
+    page.select_option("#launch-planner", planner)
+    page.fill("#launch-seed", "0")
+    page.fill("#launch-budget", budget)
+    page.click("#launch-submit")
+    page.wait_for_function("window.dashboard.state().runId !== null")
+    run_id = str(_state(page)["runId"])
+    row = page.locator(f'#runs-list [data-run-id="{run_id}"]')
+    row.wait_for()
+    assert row.get_attribute("aria-current") == "true"  # the new run is the one shown
+    return run_id
+
+
+def _wait_finished(page: Any) -> None:
+    page.wait_for_function(
+        "window.dashboard.state().runId !== null && !window.dashboard.state().live",
+        timeout=RUN_TIMEOUT_MS,
+    )
+
+
+def _node_count(page: Any) -> int:
+    return int(page.locator("#node-count").get_attribute("data-nodes"))
+
+
+def _step(page: Any) -> int:
+    return int(page.locator("#step-label").get_attribute("data-step"))
+
+
+def _step_back_over_last_node(page: Any, events: list[dict[str, Any]]) -> None:
+    """Step back with the button until the last node_added is undone, then forward again."""
+    last = len(events) - 1
+    assert _step(page) == last
+    assert page.locator("#step-label").inner_text() == f"step {last} / {last}"
+    nodes = _node_count(page)
+    added = max(i for i, e in enumerate(events) if e["type"] == "node_added")
+    for k in range(last - 1, added - 1, -1):
+        page.click("#btn-step-back")
+        assert _step(page) == k
+        assert page.locator("#step-label").inner_text() == f"step {k} / {last}"
+        assert _node_count(page) == nodes  # the node is still there up to its own event
+    page.click("#btn-step-back")
+    assert _step(page) == added - 1
+    assert _node_count(page) == nodes - 1
+    assert f"{nodes - 1:,} node" in page.locator("#node-count").inner_text()
+    page.click("#btn-step-forward")
+    assert _step(page) == added
+    assert _node_count(page) == nodes
+    assert f"node {events[added]['node_id']} added" in page.locator("#step-event").inner_text()
+
+
+def _viewer_body(request: Any) -> dict[str, Any] | None:
+    """The body of a PUT /api/viewer request; None for any other request."""
+    if request.method == "PUT" and request.url.endswith("/api/viewer"):
+        return dict(json.loads(request.post_data or "{}"))
+    return None
+
+
+def _click_node(page: Any, node: dict[str, Any]) -> None:
+    """Zoom in on a node, click it on the canvas and check what the inspector shows."""
+    page.click("#btn-last")
+    page.click("#btn-fit")
+    at = f"window.dashboard.nodePosition({node['node_id']})"
+    position = page.evaluate(at)
+    assert position is not None
+    page.mouse.move(position["x"], position["y"])
+    for _ in range(4):  # the wheel zooms around the pointer: the node stays under it
+        page.mouse.wheel(0, -400)
+    page.wait_for_function(
+        f"Math.abs({at}.x - {position['x']}) < 2 && Math.abs({at}.y - {position['y']}) < 40"
+    )
+    position = page.evaluate(at)
+    hit = page.evaluate(
+        "([x, y]) => document.elementFromPoint(x, y).id", [position["x"], position["y"]]
+    )
+    assert hit == "tree-canvas"
+    page.mouse.click(position["x"], position["y"])
+    page.wait_for_function(f"window.dashboard.state().selected === {node['node_id']}")
+    inspector = page.locator("#inspector")
+    assert inspector.locator('[data-testid="inspector-stream"]').inner_text() == node["stream"]
+    outcome = "ok" if node["success"] else "failed"
+    assert inspector.locator('[data-testid="inspector-outcome"]').inner_text() == outcome
+    wall_cpu = inspector.locator('[data-testid="inspector-seconds"]').inner_text()
+    assert re.fullmatch(r"[\d.]+ (µs|ms|s) / [\d.]+ (µs|ms|s)", wall_cpu), wall_cpu
+    if not node["success"]:
+        assert inspector.locator('[data-testid="inspector-error"]').is_visible()
+
+
+def _check_charts(page: Any, run: dict[str, Any], events: list[dict[str, Any]]) -> None:
+    """At the last step the charts show the run's query counts and its time split."""
+    page.click("#btn-last")
+    queries = page.locator("#chart-queries")
+    total = sum(c["ok"] + c["failed"] for c in run["query_counts"].values())
+    page.wait_for_function(
+        "document.getElementById('chart-queries').dataset.bars === "
+        f"'{len(run['query_counts'])}' && document.getElementById('chart-queries')"
+        f".textContent.includes('Queries per stream ({total})')"
+    )
+    assert sorted(queries.locator(".legendtext").all_text_contents()) == ["failed", "ok"]
+    assert queries.locator(".bars path").count() >= len(run["query_counts"])
+    for stream in run["query_counts"]:
+        assert stream in (queries.text_content() or "")
+    finished = next(e for e in events if e["type"] == "run_finished")
+    time_chart = page.locator("#chart-time")
+    page.wait_for_function(
+        "document.getElementById('chart-time').textContent.includes("
+        f"'planning {finished['planning_s']:.2f} s')"
+    )
+    assert "execution" in (time_chart.text_content() or "")
+
+
+def test_line_run_from_the_form(page: Any, server: Server) -> None:
+    # The reports the server has are linked from the page.
+    link = page.locator("#reports a", has_text="bench-demo")
+    link.wait_for()
+    assert link.get_attribute("href") == "/reports/bench-demo.html"
+
+    # A bad budget: the server's 422 is shown in the form, naming the field.
+    page.select_option("#launch-scene", "line-2")
+    page.fill("#launch-budget", "-5")
+    page.click("#launch-submit")
+    error = page.locator("#launch-error")
+    error.wait_for()
+    assert "422" in error.inner_text()
+    assert "budget" in error.inner_text()
+
+    viewer_puts: list[dict[str, Any] | None] = []
+    page.on("request", lambda r: viewer_puts.append(_viewer_body(r)))
+    _record_growth(page)
+    run_id = _launch(page, "line-2", "baseline", budget="60")
+    assert error.is_hidden()
+    _wait_finished(page)
+    growth = page.evaluate("window.__growth")
+    assert any(g["live"] and g["nodes"] > 0 for g in growth), growth  # arrived while live
+    run = server.api(f"/api/runs/{run_id}")
+    assert run["status"] == "solved"
+    row = page.locator(f'#runs-list [data-run-id="{run_id}"]')
+    page.wait_for_function(
+        f"document.querySelector('[data-run-id=\"{run_id}\"]').dataset.status === 'solved'"
+    )
+    assert f"{run['queries']} queries" in row.inner_text()
+
+    # The status filter keeps the list to one status.
+    page.select_option("#status-filter", "failed")
+    page.wait_for_function("!document.querySelector('#runs-list [data-run-id]')")
+    assert "No runs with status failed" in page.locator("#runs-list").inner_text()
+    page.select_option("#status-filter", "solved")
+    row.wait_for()
+    statuses = page.locator("#runs-list [data-run-id]").evaluate_all(
+        "rows => rows.map((r) => r.dataset.status)"
+    )
+    assert set(statuses) == {"solved"}
+    page.select_option("#status-filter", "")
+
+    events = server.events(run_id)
+    nodes = [e for e in events if e["type"] == "node_added"]
+    state = _state(page)
+    assert state["last"] == len(events) - 1 and state["step"] == state["last"]
+    assert state["nodes"] == len(nodes) + 1  # and the root
+    assert state["solution"] is not None
+    page.wait_for_function(
+        "document.querySelector('#run-header [data-testid=run-status]').textContent === 'solved'"
+    )
+
+    _step_back_over_last_node(page, events)
+
+    # The viewer follows what the page shows: a step back is sent, debounced, as that step.
+    if server.api("/api/health")["viewer_url"] is not None:
+        assert {"run_id": run_id, "step": None} in viewer_puts  # following it live
+        expected = {"run_id": run_id, "step": events[_step(page) - 1]["seq"]}
+        with page.expect_request(lambda r: _viewer_body(r) == expected, timeout=5000):
+            page.click("#btn-step-back")
+
+    leaf = next(n for n in nodes if n["node_id"] == state["solution"])
+    _click_node(page, leaf)
+    _check_charts(page, run, events)
+
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / "page-line-2.png"), full_page=True)
+
+
+def test_kitchen_baseline_run_grows_live(page: Any, server: Server) -> None:
+    _record_growth(page)
+    run_id = _launch(page, "kitchen-1", "baseline")
+    page.locator("#live-badge").wait_for()
+    # The tree grows over the websocket while the run is live: several counts, increasing.
+    page.wait_for_function(
+        """() => {
+            const live = window.__growth.filter((g) => g.live && g.nodes > 0).map((g) => g.nodes);
+            return new Set(live).size >= 3;
+        }""",
+        timeout=RUN_TIMEOUT_MS,
+    )
+    _wait_finished(page)
+    live = [g["nodes"] for g in page.evaluate("window.__growth") if g["live"]]
+    assert live == sorted(live), live  # following the live end, the tree only grows
+    assert page.locator("#live-badge").is_hidden()
+
+    run = server.api(f"/api/runs/{run_id}")
+    assert run["status"] == "solved", run
+    events = server.events(run_id)
+    nodes = [e for e in events if e["type"] == "node_added"]
+    assert _state(page)["nodes"] == len(nodes) + 1
+
+    _step_back_over_last_node(page, events)
+
+    # Replay from the start with play; pause; the step moved and the tree shrank back.
+    page.click("#btn-first")
+    assert _step(page) == 0
+    assert _node_count(page) == 0
+    page.click("#btn-play")
+    page.wait_for_function("window.dashboard.state().step > 10")
+    page.click("#btn-play")
+    paused = _step(page)
+    assert not _state(page)["playing"]
+    assert 10 < paused < len(events) - 1
+    assert page.locator("#step-label").inner_text() == f"step {paused} / {len(events) - 1}"
+    page.click("#btn-last")
+    assert _node_count(page) == len(nodes) + 1
+
+    queried = [n for n in nodes if n["stream"] is not None]
+    failed = [n for n in queried if not n["success"]]
+    _click_node(page, failed[-1] if failed else queried[-1])
+    _check_charts(page, run, events)
+
+    page.click("#btn-fit")
+    ARTIFACTS.mkdir(exist_ok=True)
+    viewer_url = server.api("/api/health")["viewer_url"]
+    frame = page.locator("#viewer-frame")
+    if viewer_url is None:
+        assert frame.is_hidden()
+        assert "off" in page.locator("#viewer-note").inner_text()
+        page.screenshot(path=str(ARTIFACTS / "page.png"), full_page=True)
+        return
+    assert frame.is_visible()
+    assert frame.get_attribute("src").rstrip("/") == viewer_url.rstrip("/")
+    frame.scroll_into_view_if_needed()  # Chromium paints an iframe only once it is in view
+    viewer = page.frame_locator("#viewer-frame")
+    viewer.locator("canvas").first.wait_for(timeout=60_000)
+    viewer.get_by_text("Connected").first.wait_for(timeout=30_000)  # viser's own status
+    frame.screenshot(path=str(ARTIFACTS / "viewer-in-page.png"))
+    page.screenshot(path=str(ARTIFACTS / "page.png"), full_page=True)

@@ -1,0 +1,315 @@
+"""The 3D view of a run (app/viewer.py): a real kitchen-1 run drawn in viser, and in a browser."""
+
+from __future__ import annotations
+
+import logging
+import tempfile
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from app.viewer import RunViewer
+from app.viewer_plan import plan_animation
+from app.viewer_search import NO_PREDICTION, SearchFold
+from planner.domains import problem_for_scene
+from planner.domains.kitchen import GEOMETRY_KEY
+from planner.domains.kitchen.plan_io import decode, plan_to_dict
+from planner.events import ListSink, ModelPrediction, NodeAdded, StreamQueried, event_to_dict
+from planner.runs import RunConfig, run
+
+pytestmark = pytest.mark.slow
+
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--enable-unsafe-swiftshader",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+Events = list[dict[str, Any]]
+
+
+@pytest.fixture(scope="module")
+def kitchen_run() -> tuple[Events, dict[str, Any]]:
+    """Events and bound plan of a real baseline run of kitchen-1 (seed 0)."""
+    sink = ListSink()
+    result, _, _ = run(
+        RunConfig(scene="kitchen-1", seed=0, planner="baseline", budget_s=120), sink=sink
+    )
+    assert result.bound is not None, result.status
+    plan = plan_to_dict(
+        scene="kitchen-1",
+        seed=0,
+        actions=result.bound.skeleton.actions,
+        values=result.bound.values,
+    )
+    return [event_to_dict(e) for e in sink.events], plan
+
+
+@pytest.fixture(scope="module")
+def viewer() -> Iterator[RunViewer]:
+    v = RunViewer(port=0)  # the OS picks a free port
+    yield v
+    v.close()
+
+
+def _expected(events: Events) -> dict[str, int]:
+    """Ghost counts a user should see after ``events``: one per successful sample."""
+    kinds = {
+        "sample-placement": "placements",
+        "sample-grasp": "grasps",
+        "inverse-kinematics": "confs",
+        "plan-motion": "motions",
+    }
+    out = dict.fromkeys(kinds.values(), 0)
+    for e in events:
+        if e["type"] == "node_added" and e["success"] and e["stream"] in kinds:
+            out[kinds[e["stream"]]] += 1
+    return out
+
+
+def _failed_ik(events: Events) -> Events:
+    """A failed IK query as the planner reports it: the query, then the failed node."""
+    query = next(
+        e for e in events if e["type"] == "stream_queried" and e["stream"] == "inverse-kinematics"
+    )
+    parent = next(
+        e for e in events if e["type"] == "node_added" and e["node_id"] == query["node_id"]
+    )
+    node_id = max(e["node_id"] for e in events if e["type"] == "node_added") + 1
+    seq = events[-1]["seq"] + 1
+    base = {"run_id": query["run_id"], "t": events[-1]["t"]}
+    return [
+        event_to_dict(
+            StreamQueried(
+                **base,
+                seq=seq,
+                node_id=node_id,
+                stream="inverse-kinematics",
+                input_names=query["input_names"],
+                inputs=query["inputs"],
+                success=False,
+                wall_s=0.01,
+                cpu_s=0.01,
+                execution_s=0.0,
+                error=None,
+            )
+        ),
+        event_to_dict(
+            NodeAdded(
+                **base,
+                seq=seq + 1,
+                node_id=node_id,
+                parent_id=parent["parent_id"],
+                plan_index=parent["plan_index"],
+                depth=parent["depth"],
+                stream="inverse-kinematics",
+                success=False,
+                outputs=[],
+                label="inverse-kinematics (failed)",
+            )
+        ),
+    ]
+
+
+def test_show_a_prefix_then_extend_with_the_rest(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, plan = kitchen_run
+    cut = next(
+        i + 1
+        for i, e in enumerate(events)
+        if e["type"] == "node_added" and e["stream"] == "plan-motion"
+    )
+    prefix, rest = events[:cut], events[cut:]
+    viewer.show("kitchen-1", 0, prefix, plan)
+    counts = viewer.counts
+    assert counts["events"] == cut
+    assert {k: counts[k] for k in _expected(prefix)} == _expected(prefix)
+    assert counts["confs"] == 1 and counts["motions"] == 1  # the first motion, not the later ones
+    assert counts["tree_nodes"] == counts["nodes"]
+    assert viewer.plan_seconds is None  # no solution_found yet: the robot stays at its start
+
+    viewer.extend(rest)
+    counts = viewer.counts
+    assert counts["events"] == len(events)
+    assert {k: counts[k] for k in _expected(events)} == _expected(events)
+    added = sum(e["type"] == "node_added" for e in events)
+    assert counts["nodes"] == added + 1  # and the root, which the planner never announces
+    assert counts["tree_nodes"] == counts["nodes"] and counts["hidden"] == 0
+    assert counts["failed"] == 0 and counts["skipped"] == 0
+
+
+def test_the_plan_plays_for_its_duration(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, plan = kitchen_run
+    viewer.show("kitchen-1", 0, events, plan)
+    moves = [a.split()[3].rstrip(")") for a in plan["actions"] if a.startswith("(move")]
+    seconds = sum(s["seconds"] for t in moves for s in plan["values"][t]["segments"])
+    assert viewer.plan_seconds == pytest.approx(seconds)
+    assert seconds > 1.0
+    assert viewer.playhead == 0.0
+
+    _, problem = problem_for_scene("kitchen-1", seed=0)
+    anim = plan_animation(plan, problem.values[GEOMETRY_KEY], 0)
+    cook = next(a for a in plan["actions"] if a.startswith("(cook"))
+    stove_pose = decode(plan["values"][cook.split()[2]], "cook pose")
+    start, end = anim.state_at(0.0), anim.state_at(anim.duration)
+    assert start.blocks["b1"] != stove_pose and start.held is None
+    assert end.blocks["b1"] == stove_pose and end.held is None  # cooked on the stove
+    assert any(anim.state_at(t).held is not None for t in np.linspace(0, anim.duration, 50))
+
+
+def test_a_failed_query_is_marked(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, _ = kitchen_run
+    failed = _failed_ik(events)
+    viewer.show("kitchen-1", 0, events + failed, None)
+    counts = viewer.counts
+    assert counts["failed"] == 1
+    assert counts["failed_marked"] == 1
+    assert counts["confs"] == _expected(events)["confs"]  # a failed IK draws no base pose
+
+
+def test_nodes_are_coloured_by_predicted_cost(kitchen_run: tuple[Events, dict[str, Any]]) -> None:
+    events, _ = kitchen_run
+    _, problem = problem_for_scene("kitchen-1", seed=0)
+    fold = SearchFold(problem.values[GEOMETRY_KEY], 0)
+    for e in events:
+        fold.fold(e)
+    nodes = sorted(n for n in fold.nodes if fold.nodes[n].parent_id is not None)
+    assert (fold.colors(nodes) == NO_PREDICTION).all()  # the baseline predicts nothing
+    cheap, dear = nodes[1], nodes[-1]
+    for node_id, q in ((cheap, 5.0), (dear, 80.0)):
+        fold.fold(
+            event_to_dict(
+                ModelPrediction(
+                    run_id="r", seq=999, t=1.0, node_id=node_id, p_s=0.5, r_s=1, r_f=1, r_m=0, q=q
+                )
+            )
+        )
+    (r_cheap, g_cheap, _), (r_dear, g_dear, _) = fold.colors([cheap, dear]).tolist()
+    assert g_cheap > r_cheap  # green
+    assert r_dear > g_dear  # red
+    child = fold.nodes[cheap].children[0]
+    assert fold.colors([child]).tolist() == fold.colors([cheap]).tolist()  # inherits
+
+
+def test_other_domains_unknown_scenes_and_garbage_do_not_raise(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, plan = kitchen_run
+    viewer.show("line-2", 0, events[:5], None)
+    assert viewer.counts["nodes"] == 0 and viewer.counts["events"] == 5
+    viewer.extend(events[5:7])
+    assert viewer.counts["events"] == 7
+    viewer.show("no-such-scene", 0, events, plan)
+    assert viewer.counts["nodes"] == 0
+
+    garbage: list[Any] = [
+        None,
+        42,
+        "node_added",
+        {"type": "node_added"},
+        {"type": "node_added", "node_id": "x", "parent_id": None, "success": True},
+        {"type": "node_added", "node_id": 500, "parent_id": 500, "success": True},
+        {"type": "model_prediction", "node_id": 1, "q": "nan"},
+        {"type": "stream_queried", "node_id": 501, "inputs": [{"type": "pose"}]},
+        {
+            "type": "node_added",
+            "node_id": 501,
+            "parent_id": 1,
+            "success": False,
+            "stream": "inverse-kinematics",
+        },
+        {"type": "node_added", "node_id": 502, "parent_id": 1, "success": True,
+         "stream": "plan-motion", "outputs": [{"type": "trajectory", "segments": 3}]},
+        {"type": "solution_found", "node_id": 1},
+    ]  # fmt: skip
+    viewer.show("kitchen-1", 0, events[:10] + garbage, {"actions": 5})
+    counts = viewer.counts
+    assert counts["skipped"] == 8
+    assert viewer.plan_seconds is None  # a malformed plan is not animated
+    viewer.extend(garbage)
+    viewer.show("kitchen-1", 0, events, {"format": "nonsense", "actions": ["(fly away)"]})
+    viewer.show("kitchen-1", -1, events, plan)  # the plan is for seed 0: not animated
+    assert viewer.plan_seconds is None
+    viewer.show("kitchen-1", 0, events, plan)
+    assert viewer.plan_seconds is not None
+
+
+def test_calls_from_many_threads(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]], caplog: pytest.LogCaptureFixture
+) -> None:
+    events, plan = kitchen_run
+
+    def page(i: int) -> None:  # one page stepping through the run while events come in live
+        for step in range(4):
+            cut = 5 + 3 * i + step
+            viewer.show("kitchen-1", 0, events[:cut], plan)
+            viewer.extend(events[cut : cut + 4])
+            assert viewer.counts["events"] >= 1
+
+    with caplog.at_level(logging.ERROR, logger="app"):
+        threads = [threading.Thread(target=page, args=(i,)) for i in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=60)
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR]
+    viewer.show("kitchen-1", 0, events, plan)
+    counts = viewer.counts
+    assert counts["events"] == len(events) and counts["skipped"] == 0
+    assert {k: counts[k] for k in _expected(events)} == _expected(events)
+
+
+def test_the_view_renders_in_a_browser_and_plays(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    from playwright.sync_api import sync_playwright
+
+    events, plan = kitchen_run
+    viewer.show("kitchen-1", 0, events, plan)
+    ARTIFACTS.mkdir(exist_ok=True)
+    shot = ARTIFACTS / "viewer.png"
+    with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
+        browser = pw.chromium.launch_persistent_context(
+            profile,
+            executable_path=CHROMIUM,
+            args=CHROMIUM_ARGS,
+            viewport={"width": 1280, "height": 800},
+        )
+        try:
+            page = browser.new_page()
+            page.goto(viewer.url)
+            page.wait_for_selector("canvas", timeout=30_000)
+            page.get_by_text("kitchen-1").first.wait_for(timeout=30_000)
+            page.get_by_role("button", name="Play").click()
+            deadline = time.monotonic() + 10
+            while viewer.playhead <= 0.5 and time.monotonic() < deadline:
+                time.sleep(0.1)
+            assert viewer.playhead > 0.5  # the plan plays
+            time.sleep(1.5)  # a few frames of the software renderer
+            page.screenshot(path=str(shot))
+        finally:
+            browser.close()
+    image = iio.imread(shot)
+    assert image.shape[0] == 800 and image.shape[1] == 1280
+    pixels = image[..., :3].reshape(-1, 3)
+    colours = np.unique(pixels[::97], axis=0)
+    assert len(colours) > 20, "the screenshot is (nearly) one colour"

@@ -1,0 +1,128 @@
+"""Benchmarks: checked before any trial, interleaved, resumable, the same on a process pool and
+on Ray, and a report with paired statistics."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from planner.bench import BenchConfig, BenchError, check, make_config, run_bench, trial_order
+from planner.cli import main
+from planner.learning.model import CostModel
+from planner.report import render_html, summarize
+from planner.runs import DEFAULT_MODEL
+from planner.store import RunStore
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "says"),
+    [
+        ({"planners": ["baseline", "magic"]}, "unknown planner"),
+        ({"planners": ["baseline", "baseline"]}, "twice"),
+        ({"trials": 0}, "--trials"),
+        ({"budget_s": 0.0}, "--budget"),
+        ({"budget_s": 1e6}, "--budget"),
+        ({"seed_start": -1}, "--seed-start"),
+        ({"model": "m.pt"}, "only used by the learned planner"),
+    ],
+)
+def test_bad_settings_fail_before_any_trial(kwargs: dict[str, object], says: str) -> None:
+    args: dict[str, object] = {
+        "planners": ["baseline"],
+        "trials": 2,
+        "seed_start": 0,
+        "budget_s": 10.0,
+    }
+    args.update(kwargs)
+    with pytest.raises(BenchError, match=says):
+        make_config("line-2", **args)  # type: ignore[arg-type]
+
+
+def test_the_model_must_fit_the_scene_and_not_have_seen_its_seeds(tmp_path: Path) -> None:
+    model = CostModel.load(DEFAULT_MODEL)
+    model.metadata["training_seeds"] = {"kitchen-4": list(range(20))}
+    path = tmp_path / "m.pt"
+    model.save(path)
+    seen = make_config(
+        "kitchen-4", ["baseline", "learned"], trials=5, seed_start=15, budget_s=10, model=str(path)
+    )
+    with pytest.raises(BenchError, match="trained on kitchen-4 seeds 15, 16, 17, 18, 19"):
+        check(seen)
+    held_out = make_config(
+        "kitchen-4", ["baseline", "learned"], trials=5, seed_start=20, budget_s=10, model=str(path)
+    )
+    assert check(held_out)["training_seeds"] == {"kitchen-4": list(range(20))}
+    other_domain = make_config(
+        "line-2", ["baseline", "learned"], trials=1, seed_start=0, budget_s=10, model=str(path)
+    )
+    with pytest.raises(Exception, match="domain"):
+        check(other_domain)
+
+
+def test_trials_are_paired_and_interleaved() -> None:
+    config = BenchConfig("line-2", ("baseline", "sequential"), (5, 6, 7), 10.0)
+    order = [(t.seed, t.planner) for t in trial_order(config)]
+    assert order == [
+        (5, "baseline"),
+        (5, "sequential"),
+        (6, "sequential"),
+        (6, "baseline"),
+        (7, "baseline"),
+        (7, "sequential"),
+    ]
+
+
+def _outcomes(db: Path, bench_id: str) -> dict[tuple[int, str], tuple[str, int]]:
+    with RunStore(db) as store:
+        return {(t.seed, t.planner): (t.status, t.queries) for t in store.bench_trials(bench_id)}
+
+
+@pytest.mark.slow
+def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    config = make_config(
+        "line-2", ["baseline", "sequential"], trials=2, seed_start=0, budget_s=60.0
+    )
+    local_db, ray_db = tmp_path / "local.db", tmp_path / "ray.db"
+    local_id, local = run_bench(local_db, config, workers=2)
+    assert len(local) == 4 and all(r.status == "solved" for r in local)
+
+    monkeypatch.setenv("RAY_AUTH_MODE", "disabled")
+    monkeypatch.setenv("RAY_USAGE_STATS_ENABLED", "0")
+    ray_id, on_ray = run_bench(ray_db, config, workers=2, ray_address="local")
+    assert len(on_ray) == 4
+    assert _outcomes(ray_db, ray_id) == _outcomes(local_db, local_id)  # same per-seed outcomes
+
+    summary = summarize(local_db, local_id)
+    assert summary["planners"]["baseline"]["solved"] == 2
+    paired = summary["paired"]["sequential"]["total_censored"]
+    assert paired["n"] == 2 and paired["low"] <= paired["mean"] <= paired["high"]
+    page = render_html(summary)
+    assert "Plotly" in page and "sequential vs baseline" in page  # figures and the paired table
+    assert "baseline (x)" in page
+
+    out = tmp_path / "report.html"
+    assert main(["report", local_id, "--db", str(local_db), "--out", str(out)]) == 0
+    assert out.stat().st_size > 1_000_000  # plotly inlined: the file opens anywhere
+
+
+@pytest.mark.slow
+def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> None:
+    db = tmp_path / "b.db"
+    config = make_config("line-2", ["baseline"], trials=2, seed_start=3, budget_s=60.0)
+    bench_id, first = run_bench(db, config, workers=1)
+    assert len(first) == 2
+    # Forget one trial, as if the benchmark had been stopped before it finished.
+    with RunStore(db) as store, store.engine.begin() as conn:
+        conn.exec_driver_sql("DELETE FROM bench_trials WHERE seed = 4")
+    _, again = run_bench(db, resume=bench_id, workers=1)
+    assert [(r.trial.seed, r.trial.planner) for r in again] == [(4, "baseline")]
+    assert _outcomes(db, bench_id)[(4, "baseline")][0] == "solved"
+    with pytest.raises(BenchError, match="unknown benchmark"):
+        run_bench(db, resume="nope")
+    assert json.loads(json.dumps(summarize(db, bench_id)))["planners"]["baseline"]["trials"] == 2
+    assert os.path.exists(db)
