@@ -36,19 +36,9 @@ from typing import Any
 
 from playwright.sync_api import Page, Route, sync_playwright
 
+from app.browser import CHROMIUM_ARGS, require_chromium
+
 ROOT = Path(__file__).resolve().parent.parent
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--enable-unsafe-swiftshader",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 EVENTS_PATH = "/bench/events.json"  # answered by the benchmark itself, on the page's origin
 LOAD_TARGET_MS = 2000.0
 STEP_TARGET_MS = 50.0
@@ -341,7 +331,7 @@ def main() -> int:
             with sync_playwright() as pw:
                 browser = pw.chromium.launch_persistent_context(
                     str(Path(tmp) / "profile"),
-                    executable_path=CHROMIUM,
+                    executable_path=require_chromium(),
                     args=CHROMIUM_ARGS,
                     headless=True,
                     viewport={"width": 1440, "height": 1000},

@@ -14,6 +14,7 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 
+from app.browser import CHROMIUM_ARGS, require_chromium
 from app.viewer import RunViewer
 from app.viewer_plan import plan_animation
 from app.viewer_search import NO_PREDICTION, SearchFold
@@ -26,18 +27,6 @@ from planner.runs import RunConfig, run
 pytestmark = pytest.mark.slow
 
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--enable-unsafe-swiftshader",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 Events = list[dict[str, Any]]
 
@@ -290,7 +279,7 @@ def test_the_view_renders_in_a_browser_and_plays(
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
         browser = pw.chromium.launch_persistent_context(
             profile,
-            executable_path=CHROMIUM,
+            executable_path=require_chromium(),
             args=CHROMIUM_ARGS,
             viewport={"width": 1280, "height": 800},
         )
