@@ -16,6 +16,8 @@ from planner.report import render_html, summarize
 from planner.runs import DEFAULT_MODEL
 from planner.store import RunStore
 
+LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
+
 
 @pytest.mark.parametrize(
     ("kwargs", "says"),
@@ -84,9 +86,7 @@ def _outcomes(db: Path, bench_id: str) -> dict[tuple[int, str], tuple[str, int]]
 def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    config = make_config(
-        "line-2", ["baseline", "sequential"], trials=2, seed_start=0, budget_s=60.0
-    )
+    config = make_config(LINE, ["baseline", "sequential"], trials=2, seed_start=0, budget_s=60.0)
     local_db, ray_db = tmp_path / "local.db", tmp_path / "ray.db"
     local_id, local = run_bench(local_db, config, workers=2)
     assert len(local) == 4 and all(r.status == "solved" for r in local)
@@ -113,7 +113,7 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
 @pytest.mark.slow
 def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> None:
     db = tmp_path / "b.db"
-    config = make_config("line-2", ["baseline"], trials=2, seed_start=3, budget_s=60.0)
+    config = make_config(LINE, ["baseline"], trials=2, seed_start=3, budget_s=60.0)
     bench_id, first = run_bench(db, config, workers=1)
     assert len(first) == 2
     # Forget one trial, as if the benchmark had been stopped before it finished.
