@@ -122,6 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--no-record", action="store_true", help="do not record the run")
 
     pl.add_argument("--model", help="model file for --planner learned (default: shipped model)")
+    pl.add_argument("--c-explore", type=float, help="learned: UCT exploration weight")
 
     co = sub.add_parser(
         "collect",
@@ -346,6 +347,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         k=args.k,
         budget_s=args.budget,
         model=args.model,
+        c_explore=args.c_explore,
     )
     problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
     progress = _progress_line()

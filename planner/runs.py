@@ -59,6 +59,7 @@ class RunConfig:
     attempts: int = 10  # sequential only: queries of one stream before a restart
     restarts: int = 3  # sequential only: restarts of one skeleton before the next
     model: str | None = None  # learned only: model file (default: the shipped kitchen model)
+    c_explore: float | None = None  # learned only: UCT exploration weight (default: LearnedConfig)
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -256,7 +257,20 @@ def _learned_policy(
             q=q,
         )
 
-    return LearnedPolicy(predictor, plans, states, initial, jsonable, fluents, on_prediction=report)
+    from planner.search.learned import LearnedConfig
+
+    config_ = LearnedConfig() if config.c_explore is None else LearnedConfig(config.c_explore)
+    return LearnedPolicy(
+        predictor,
+        plans,
+        states,
+        initial,
+        jsonable,
+        fluents,
+        config_,
+        on_prediction=report,
+        evidence_ignore=frozenset(loaded.spec.evidence_ignore),
+    )
 
 
 def _sequential(

@@ -30,6 +30,9 @@ class DomainSpec:
     problem_from_scene: ProblemBuilder
     bindings: BindingFactory | None  # None: samplers not written yet
     diversity_ignore: tuple[str, ...] = ()  # actions that only reorder (see AbstractConfig)
+    # Fluents that do not change a stream's outcome: left out when the learned search pools the
+    # outcomes of the same query made from different nodes (see LearnedPolicy).
+    evidence_ignore: tuple[str, ...] = ()
 
     @property
     def directory(self) -> Path:

@@ -9,6 +9,7 @@ through the :class:`Predictor` protocol, so this module needs no torch.
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -19,6 +20,9 @@ from planner.pddl.structs import Atom
 from planner.search.tree import ROOT, Node, Tree
 
 P_MIN = 0.02  # P_S is clamped here: a stream never looks hopeless (Eq. 1 divides by it)
+INFEASIBLE_PRIOR = 0.3  # chance that a binding makes its next stream impossible, before trying
+ITERATION_S = 0.05  # seconds of search (descent, predictions, events) around each query
+P_FLOOR = 1e-6  # lowest success chance after failures (keeps Eq. 1 finite)
 
 
 @dataclass(frozen=True)
@@ -40,6 +44,31 @@ class StreamCost:
 def remaining_cost(costs: Sequence[StreamCost]) -> float:
     """Eq. 4: expected seconds for the rest of a stream plan."""
     return sum(c.expected for c in costs)
+
+
+def after_attempts(
+    cost: StreamCost, successes: int, failures: int, failed_s: float | None = None
+) -> float:
+    """Eq. 1 for a node's next stream once it has been queried from that node.
+
+    A success proves the binding feasible: the success chance becomes a Beta posterior around
+    the prediction (weight 2). Failures only: the binding may make the stream impossible
+    (prior :data:`INFEASIBLE_PRIOR`); each failure makes that likelier, so the expected cost
+    of insisting grows without bound, and the search backs up to re-sample an ancestor once
+    insisting costs more than redoing the streams in between. Every failure also costs
+    :data:`ITERATION_S` of search around it.
+    """
+    if successes == 0 and failures == 0:
+        return cost.expected
+    p = min(max(cost.p_s, P_MIN), 1.0)
+    if successes > 0:
+        p_eff = (2.0 * p + successes) / (2.0 + successes + failures)
+    else:
+        feasible = (1.0 - INFEASIBLE_PRIOR) * (1.0 - p) ** failures
+        p_eff = p * feasible / (feasible + INFEASIBLE_PRIOR)
+    p_eff = max(p_eff, P_FLOOR)
+    r_f = max(cost.r_f, failed_s or 0.0)
+    return cost.r_s + cost.r_m + (1.0 - p_eff) / p_eff * (r_f + ITERATION_S)
 
 
 class Predictor(Protocol):
@@ -67,9 +96,12 @@ class LearnedPolicy:
     fluents: frozenset[str]
     config: LearnedConfig = field(default_factory=LearnedConfig)
     on_prediction: Callable[[Node, StreamCost, float], None] | None = None
-    _q: dict[int, float] = field(default_factory=dict)
-    _best: dict[int, float] = field(default_factory=dict)  # lowest Q reached below a node
-    _tree: Tree | None = None
+    evidence_ignore: frozenset[str] = frozenset()  # fluents left out of a query's identity
+    _q: dict[int, float] = field(default_factory=dict)  # Eq. 4 before any attempt
+    _terms: dict[int, list[tuple[str | None, StreamCost]]] = field(default_factory=dict)
+    _groups: dict[str, list[int]] = field(default_factory=dict)  # query -> nodes that make it
+    _evidence: dict[str, tuple[int, int]] = field(default_factory=dict)  # ok, failed
+    _est: dict[int, float] = field(default_factory=dict)  # lowest Q in each node's subtree
     _scale: float = 0.0
 
     # --- Q of a node -------------------------------------------------------------------------
@@ -95,22 +127,91 @@ class LearnedPolicy:
             rows.append((inst.stream, inputs, context))
         return rows
 
-    def q(self, tree: Tree, node: Node) -> float:
-        """Expected remaining seconds of ``node``'s plan from its next stream on (cached)."""
-        if node.id in self._q:
-            return self._q[node.id]
-        values = {**self.initial_values, **tree.bindings(node.id)}
-        rows = self._rows(node.plan_index, node.depth, values)
+    def _key(self, row: tuple[str, list[Any | None], dict[str, Any]]) -> str | None:
+        """A query's identity: stream, inputs and the state that matters; None while an input
+        is unbound."""
+        stream, inputs, context = row
+        if any(v is None for v in inputs):
+            return None
+        facts = [f for f in context["facts"] if f[0] not in self.evidence_ignore]
+        names = {x for f in facts for x in f[1:]}
+        values = {n: v for n, v in context["values"].items() if n in names}
+        return json.dumps([stream, inputs, facts, values], sort_keys=True, default=str)
+
+    def _predict(self, tree: Tree, nodes: Sequence[Node]) -> None:
+        """Eq. 4 predictions for nodes that have none yet, in one batch."""
+        todo = [n for n in nodes if n.id not in self._q]
+        if not todo:
+            return
+        spans: list[tuple[Node, int, int]] = []
+        rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
+        for node in todo:
+            values = {**self.initial_values, **tree.bindings(node.id)}
+            mine = self._rows(node.plan_index, node.depth, values)
+            spans.append((node, len(rows), len(rows) + len(mine)))
+            rows += mine
         costs = self.predictor.predict_rows(rows) if rows else []
-        q = remaining_cost(costs)
-        self._q[node.id] = q
-        if self.on_prediction is not None and costs:
-            self.on_prediction(node, costs[0], q)
-        return q
+        for node, lo, hi in spans:
+            ours = costs[lo:hi]
+            keys = [self._key(row) for row in rows[lo:hi]]
+            self._terms[node.id] = list(zip(keys, ours, strict=True))
+            if keys and keys[0] is not None:  # the node's children are attempts of this query
+                self._groups.setdefault(keys[0], []).append(node.id)
+            self._q[node.id] = remaining_cost(ours)
+            if ours and self.on_prediction is not None:
+                self.on_prediction(node, ours[0], self._q[node.id])
+
+    def q(self, tree: Tree, node: Node) -> float:
+        """Expected remaining seconds of ``node``'s plan from its next stream on: Eq. 4 over
+        the predictions (made once per node), each term updated by the outcomes of the same
+        query already made anywhere in the tree (same inputs, same relevant state; see
+        :func:`after_attempts`), as counted at the last refresh."""
+        self._predict(tree, [node])
+        if not self._evidence:
+            return self._q[node.id]
+        total = 0.0
+        for key, cost in self._terms[node.id]:
+            seen = self._evidence.get(key) if key is not None else None
+            if seen is None:
+                total += cost.expected
+            else:
+                ok, failed = seen
+                total += after_attempts(cost, ok, failed)
+        return total
+
+    def _refresh(self, tree: Tree) -> None:
+        """Count the outcomes of every query made, then estimate every node: the lowest Q in
+        its subtree (progress counts; a dead end below raises its Q until another branch is
+        cheaper). Children come after their parents, so one pass from the last id does it."""
+        self._predict(tree, [n for n in tree.nodes[1:] if n.success])
+        # Outcomes only, never seconds measured: the same seed makes the same search.
+        evidence: dict[str, tuple[int, int]] = {}
+        for key, makers in self._groups.items():
+            ok = failed = 0
+            for n in makers:
+                for c in tree[n].children:
+                    if tree[c].success:
+                        ok += 1
+                    else:
+                        failed += 1
+            if ok or failed:
+                evidence[key] = (ok, failed)
+        self._evidence = evidence
+        est: dict[int, float] = {}
+        for node in reversed(tree.nodes[1:]):
+            if not node.success:
+                continue
+            best = self.q(tree, node)
+            for c in node.children:
+                if c in est and est[c] < best:
+                    best = est[c]
+            est[node.id] = best
+        self._est = est
 
     def _estimate(self, tree: Tree, node: Node) -> float:
-        """The node's Q, or the lowest Q reached below it: progress in a plan counts."""
-        return min(self.q(tree, node), self._best.get(node.id, math.inf))
+        """The lowest Q in the node's subtree (as of the last refresh)."""
+        found = self._est.get(node.id)
+        return found if found is not None else self.q(tree, node)
 
     def _value(self, q: float) -> float:
         return self._scale / (self._scale + q) if self._scale > 0 else 1.0 / (1.0 + q)
@@ -127,7 +228,7 @@ class LearnedPolicy:
         return plans_added < plans_total  # only if initial_plans left some closed
 
     def pick_plan(self, tree: Tree) -> Node:
-        self._tree = tree
+        self._refresh(tree)
         root = tree[ROOT]
         plans = [tree[c] for c in root.children]
         if self._scale <= 0:
@@ -142,7 +243,9 @@ class LearnedPolicy:
         if not live:
             return True
         again = self._value(self.q(tree, node)) + self._bonus(len(node.children), node.visits)
-        best = max(self._value(self.q(tree, c)) + self._bonus(c.visits, node.visits) for c in live)
+        best = max(
+            self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits) for c in live
+        )
         return again > best
 
     def pick_child(self, tree: Tree, node: Node) -> Node:
@@ -152,11 +255,5 @@ class LearnedPolicy:
         )
 
     def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
-        """Back up the lowest Q reached (by the leaf, or before a failed query) to the root."""
-        if self._tree is not None:
-            # A failed query still shows how far the plan got: its parent's Q.
-            reached = leaf if leaf.success or leaf.parent is None else self._tree[leaf.parent]
-            q = self.q(self._tree, reached)
-            for i in self._tree.path(reached.id):
-                self._best[i] = min(self._best.get(i, math.inf), q)
-        return 1.0 if leaf.success else 0.0
+        """1 for a bound plan, 0 otherwise (the choices read Q, refreshed every iteration)."""
+        return 1.0 if leaf.success and leaf.depth == len(plan.stream_plan) else 0.0

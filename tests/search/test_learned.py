@@ -125,3 +125,43 @@ def test_policy_prefers_the_cheap_certain_branch() -> None:
     assert policy.q(tree, unlikely) > policy.q(tree, certain)
     assert policy.pick_child(tree, node).id == certain.id
     assert not policy.expand(tree, node)  # a certain child beats sampling the pose again
+
+
+def test_failures_make_insisting_costlier_and_a_success_makes_it_cheaper() -> None:
+    from planner.search.learned import ITERATION_S, StreamCost, after_attempts
+
+    cost = StreamCost(p_s=0.5, r_s=0.01, r_f=0.001, r_m=0.0)
+    assert after_attempts(cost, 0, 0) == pytest.approx(cost.expected)
+    insisting = [after_attempts(cost, 0, n) for n in range(0, 30, 3)]
+    assert insisting == sorted(insisting) and insisting[-1] > 1000  # a dead end, eventually
+    # 3 failures: P(feasible) = 0.7 * 0.125 / (0.7 * 0.125 + 0.3), p = half of it
+    p = 0.5 * (0.7 * 0.125) / (0.7 * 0.125 + 0.3)
+    assert after_attempts(cost, 0, 3) == pytest.approx(0.01 + (1 - p) / p * (0.001 + ITERATION_S))
+    # one success proves the binding feasible: p = (2 * 0.5 + 1) / (2 + 1 + 3) = 1/3
+    assert after_attempts(cost, 1, 3) == pytest.approx(0.01 + 2.0 * (0.001 + ITERATION_S))
+    assert after_attempts(cost, 1, 3) < after_attempts(cost, 0, 3)
+    # failures that took longer than predicted cost what they took
+    assert after_attempts(cost, 1, 3, failed_s=0.5) == pytest.approx(
+        0.01 + 2.0 * (0.5 + ITERATION_S)
+    )
+
+
+def test_the_same_query_from_two_nodes_pools_its_outcomes() -> None:
+    search, policy = make(ListSink())
+    tree = search.tree
+    plan = search.skeletons[0]
+    i = next(j for j, s in enumerate(plan.stream_plan) if s.stream == "sample-pose")
+    node = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    for depth in range(1, i + 1):
+        node = tree.add(node.id, plan_index=0, depth=depth, success=True)
+    pose = plan.stream_plan[i].outputs[0]
+    first = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 2.0})
+    twin = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 2.0})
+    other = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.0})
+    before = [policy.q(tree, n) for n in (first, twin, other)]
+    for _ in range(6):  # the next query fails from the first node, again and again
+        tree.add(first.id, plan_index=0, depth=i + 2, success=False)
+    policy.pick_plan(tree)  # each iteration starts by counting the outcomes so far
+    after = [policy.q(tree, n) for n in (first, twin, other)]
+    assert after[0] > before[0] and after[1] == pytest.approx(after[0])  # the twin learns too
+    assert after[2] == pytest.approx(before[2])  # another query does not

@@ -78,4 +78,6 @@ SPEC = DomainSpec(
     problem_from_scene=problem_from_scene,
     bindings=_bindings,
     diversity_ignore=("move",),  # moves only connect configurations; compare what is done
+    # Where the robot stands and how it holds the block do not change where a block fits.
+    evidence_ignore=("at-conf", "can-move", "holding"),
 )
