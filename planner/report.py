@@ -92,9 +92,11 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
         ]
         entry: dict[str, Any] = {"seeds": len(seeds), "both_solved": len(both)}
         for m in MEASURES:
+            # An unsolved trial has no execution to compare: execution is over both-solved seeds.
+            pool = both if m == "execution" else seeds
             entry[f"{m}_censored"] = _improvement(
-                [_times(by[p][s], budget)[m] for s in seeds],
-                [_times(by[reference][s], budget)[m] for s in seeds],
+                [_times(by[p][s], budget)[m] for s in pool],
+                [_times(by[reference][s], budget)[m] for s in pool],
                 rng,
             )
             entry[f"{m}_both_solved"] = _improvement(
@@ -136,6 +138,13 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
     }
 
 
+def _change(v: float | None) -> str:
+    """An improvement as words: "41.9% less" or "12.0% more"."""
+    if v is None or math.isnan(v):
+        return "-"
+    return f"{100 * abs(v):.1f}% {'less' if v >= 0 else 'more'}"
+
+
 def _fmt(v: Any, pct: bool = False) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "-"
@@ -162,11 +171,11 @@ def table_markdown(summary: dict[str, Any]) -> str:
         c, b = e["total_censored"], e["total_both_solved"]
         lines.append("")
         lines.append(
-            f"{p} vs {summary['reference']}: mean total time {_fmt(c['mean'], True)} lower "
-            f"(95% CI {_fmt(c['low'], True)} to {_fmt(c['high'], True)}) over {c['n']} paired "
-            f"seeds, unsolved trials counted at the budget; {_fmt(b['mean'], True)} "
-            f"({_fmt(b['low'], True)} to {_fmt(b['high'], True)}) over the {b['n']} seeds both "
-            "solved."
+            f"{p} vs {summary['reference']}: {_change(c['mean'])} mean total time (improvement "
+            f"{_fmt(c['mean'], True)}, 95% CI {_fmt(c['low'], True)} to {_fmt(c['high'], True)}) "
+            f"over {c['n']} paired seeds, unsolved trials counted at the budget; improvement "
+            f"{_fmt(b['mean'], True)} ({_fmt(b['low'], True)} to {_fmt(b['high'], True)}) over "
+            f"the {b['n']} seeds both solved."
         )
     return "\n".join(lines)
 
@@ -189,6 +198,8 @@ def render_html(summary: dict[str, Any]) -> str:
                 a, b = row.get(reference, {}), row.get(other, {})
                 if m not in a or m not in b:
                     continue
+                if m == "execution" and not a["status"] == b["status"] == "solved":
+                    continue  # nothing was executed
                 xs.append(a[m])
                 ys.append(b[m])
                 text.append(f"seed {row['seed']}: {a['status']} / {b['status']}")
@@ -223,7 +234,7 @@ def render_html(summary: dict[str, Any]) -> str:
             fig.update_yaxes(title_text=f"{other} (s)", row=1, col=col)
         fig.update_layout(
             title=f"Per trial: {reference} (x) vs {other} (y); below the diagonal, {other} is "
-            "faster; x marks a trial one of them did not solve (counted at the budget)",
+            "faster; x: one of them did not solve (counted at the budget; no execution shown)",
             height=420,
         )
         figures.append(fig)
@@ -326,10 +337,13 @@ def _html_table(summary: dict[str, Any]) -> str:
         items = []
         for m in MEASURES:
             c = e[f"{m}_censored"]
+            where = (
+                "seeds both solved" if m == "execution" else "paired seeds, unsolved at the budget"
+            )
             items.append(
-                f"<li>{m}: {_fmt(c['mean'], True)} lower (95% CI {_fmt(c['low'], True)} to "
-                f"{_fmt(c['high'], True)}), {c['n']} paired seeds, unsolved at the budget; "
-                f"{_fmt(e[f'{m}_both_solved']['mean'], True)} over the "
+                f"<li>{m}: {_change(c['mean'])} (improvement {_fmt(c['mean'], True)}, 95% CI "
+                f"{_fmt(c['low'], True)} to {_fmt(c['high'], True)}), {c['n']} {where}; "
+                f"{_change(e[f'{m}_both_solved']['mean'])} over the "
                 f"{e[f'{m}_both_solved']['n']} seeds both solved</li>"
             )
         rows.append(
