@@ -20,7 +20,8 @@ from planner.pddl.structs import Atom
 from planner.search.tree import ROOT, Node, Tree
 
 P_MIN = 0.02  # P_S is clamped here: a stream never looks hopeless (Eq. 1 divides by it)
-INFEASIBLE_PRIOR = 0.3  # chance that a binding makes its next stream impossible, before trying
+INFEASIBLE_PRIOR = 0.3  # least chance that a binding makes its next stream impossible
+INFEASIBLE_MAX = 0.95  # most chance of it, before trying (1 - P_S when the model is doubtful)
 ITERATION_S = 0.05  # seconds of search (descent, predictions, events) around each query
 P_FLOOR = 1e-6  # lowest success chance after failures (keeps Eq. 1 finite)
 
@@ -53,7 +54,8 @@ def after_attempts(
 
     A success proves the binding feasible: the success chance becomes a Beta posterior around
     the prediction (weight 2). Failures only: the binding may make the stream impossible
-    (prior :data:`INFEASIBLE_PRIOR`); each failure makes that likelier, so the expected cost
+    (prior ``1 - P_S``, between :data:`INFEASIBLE_PRIOR` and :data:`INFEASIBLE_MAX`); each
+    failure makes that likelier, so the expected cost
     of insisting grows without bound, and the search backs up to re-sample an ancestor once
     insisting costs more than redoing the streams in between. Every failure also costs
     :data:`ITERATION_S` of search around it.
@@ -64,8 +66,10 @@ def after_attempts(
     if successes > 0:
         p_eff = (2.0 * p + successes) / (2.0 + successes + failures)
     else:
-        feasible = (1.0 - INFEASIBLE_PRIOR) * (1.0 - p) ** failures
-        p_eff = p * feasible / (feasible + INFEASIBLE_PRIOR)
+        # A stream the model expects to fail is likelier to be impossible from here.
+        infeasible = min(max(INFEASIBLE_PRIOR, 1.0 - p), INFEASIBLE_MAX)
+        feasible = (1.0 - infeasible) * (1.0 - p) ** failures
+        p_eff = p * feasible / (feasible + infeasible)
     p_eff = max(p_eff, P_FLOOR)
     r_f = max(cost.r_f, failed_s or 0.0)
     return cost.r_s + cost.r_m + (1.0 - p_eff) / p_eff * (r_f + ITERATION_S)

@@ -134,8 +134,9 @@ def test_failures_make_insisting_costlier_and_a_success_makes_it_cheaper() -> No
     assert after_attempts(cost, 0, 0) == pytest.approx(cost.expected)
     insisting = [after_attempts(cost, 0, n) for n in range(0, 30, 3)]
     assert insisting == sorted(insisting) and insisting[-1] > 1000  # a dead end, eventually
-    # 3 failures: P(feasible) = 0.7 * 0.125 / (0.7 * 0.125 + 0.3), p = half of it
-    p = 0.5 * (0.7 * 0.125) / (0.7 * 0.125 + 0.3)
+    # prior of a dead end: 1 - P_S = 0.5; 3 failures: P(feasible) = 0.5 * 0.125 /
+    # (0.5 * 0.125 + 0.5) = 1/9, and the chance of success is half of it
+    p = 0.5 * (0.5 * 0.125) / (0.5 * 0.125 + 0.5)
     assert after_attempts(cost, 0, 3) == pytest.approx(0.01 + (1 - p) / p * (0.001 + ITERATION_S))
     # one success proves the binding feasible: p = (2 * 0.5 + 1) / (2 + 1 + 3) = 1/3
     assert after_attempts(cost, 1, 3) == pytest.approx(0.01 + 2.0 * (0.001 + ITERATION_S))
