@@ -206,10 +206,16 @@ def _run_ray(
 
     started_here = not ray.is_initialized()
     if started_here:
-        if address == "local":
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-        else:
-            ray.init(address=address, log_to_driver=False)
+        try:
+            if address == "local":
+                ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+            else:
+                ray.init(address=address, log_to_driver=False)
+        except Exception as exc:  # no trial has started: the benchmark resumes once Ray is up
+            raise ValueError(
+                f"cannot reach a Ray cluster at {address!r} ({type(exc).__name__}: {exc}); "
+                "give an address, 'auto' for the cluster this machine belongs to, or 'local'"
+            ) from exc
     try:
         # A fresh worker process per trial (max_calls=1), no silent retries: a trial runs once.
         remote = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(run_trial)

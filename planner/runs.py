@@ -66,6 +66,8 @@ class RunConfig:
             raise ValueError(f"unknown planner {self.planner!r} (known: {', '.join(PLANNERS)})")
         if not 0 < self.budget_s <= 86_400:
             raise ValueError(f"budget must be between 0 and 86400 s, got {self.budget_s}")
+        if self.c_explore is not None and not 0.0 <= self.c_explore <= 10.0:
+            raise ValueError(f"c_explore must be between 0 and 10, got {self.c_explore}")
         if self.k < 1 or self.attempts < 1 or self.restarts < 1:
             raise ValueError("k, attempts and restarts must be positive")
 

@@ -47,9 +47,7 @@ def remaining_cost(costs: Sequence[StreamCost]) -> float:
     return sum(c.expected for c in costs)
 
 
-def after_attempts(
-    cost: StreamCost, successes: int, failures: int, failed_s: float | None = None
-) -> float:
+def after_attempts(cost: StreamCost, successes: int, failures: int) -> float:
     """Eq. 1 for a node's next stream once it has been queried from that node.
 
     A success proves the binding feasible: the success chance becomes a Beta posterior around
@@ -71,8 +69,7 @@ def after_attempts(
         feasible = (1.0 - infeasible) * (1.0 - p) ** failures
         p_eff = p * feasible / (feasible + infeasible)
     p_eff = max(p_eff, P_FLOOR)
-    r_f = max(cost.r_f, failed_s or 0.0)
-    return cost.r_s + cost.r_m + (1.0 - p_eff) / p_eff * (r_f + ITERATION_S)
+    return cost.r_s + cost.r_m + (1.0 - p_eff) / p_eff * (cost.r_f + ITERATION_S)
 
 
 class Predictor(Protocol):
