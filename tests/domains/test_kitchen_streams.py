@@ -16,7 +16,7 @@ from planner.domains.kitchen.geometry import BlockPose
 from planner.domains.kitchen.plan_io import read_plan, write_plan
 from planner.domains.kitchen.samplers import KitchenSamplers
 from planner.domains.kitchen.validate import validate_plan
-from planner.domains.kitchen.values import Trajectory
+from planner.domains.kitchen.values import Grasp, Trajectory
 from planner.pddl import Atom
 from planner.search import BoundPlan, bind_sequentially
 from planner.streams import StreamContext
@@ -104,6 +104,54 @@ def test_crowded_stove_makes_placement_fail() -> None:
     assert empty == 1.0
     assert packed > 0.5
     assert careless < 0.1, (empty, packed, careless)
+
+
+def test_four_blocks_fit_on_the_stove_one_after_another() -> None:
+    """The placement sampler packs blocks into corners: on the 22 cm stove, where one block put
+    in the middle leaves no room, four blocks placed in turn almost always fit."""
+    _, problem = problem_for_scene("kitchen-4", seed=0)
+    samplers = KitchenSamplers(problem.values[GEOMETRY_KEY], random.Random(3))  # type: ignore[arg-type]
+    fitted = 0
+    try:
+        for _ in range(20):
+            values: dict[str, object] = {}
+            state: set[Atom] = set()
+            for i, block in enumerate(("b1", "b2", "b3", "b4")):
+                context = StreamContext(frozenset(state), values)
+                out = samplers.sample_placement(block, "stove", context=context)
+                if out is None:
+                    break
+                values[f"p{i}"] = out[0]
+                state.add(Atom("at-pose", (block, f"p{i}")))
+            else:
+                fitted += 1
+    finally:
+        samplers.close()
+    assert fitted >= 18, fitted
+
+
+def test_ik_refuses_a_pick_whose_retreat_drags_the_block_into_the_table() -> None:
+    """Regression (kitchen-4, learned, seed 1006): a tilted side grasp whose straight joint-space
+    retreat dips the lifted block 1 mm into the table. Checked with the hand empty (all IK used
+    to check) the move is free; with the block in the hand, as the validator replays it, it is
+    not, and the pick's IK check now says so."""
+    _, problem = problem_for_scene("kitchen-4", seed=1006)
+    samplers = KitchenSamplers(problem.values[GEOMETRY_KEY], random.Random(0))  # type: ignore[arg-type]
+    pose = BlockPose(0.9535239138401504, 0.35053040629103227, 0.755, -0.30238121122618006)
+    quat = (-0.1404804310189812, -0.14048043101898117, 0.6930117232058354, -0.6930117232058353)
+    grasp = Grasp("side", ((0.0, 0.0, 0.01), quat), 0.1)
+    base = (0.2814863525851464, 0.5185574254262535, 0.25739751340643247)
+    arm = (-0.27540204679835184, 0.07564775062094964, -2.072222222222222, -0.7789089138273962,
+           -1.8821670212861488, -2.1764829037249482, -0.6292091269125448)  # fmt: skip
+    approach = (0.01180340043807466, 0.017611108842412654, -2.594444444444444,
+                -0.39062690680435486, -1.423577787726077, -2.0695201739181144,
+                -0.8601020605929666)  # fmt: skip
+    try:
+        samplers.world.set_blocks({"b4": pose})
+        assert samplers._straight_ok(base, 0.2, approach, arm, ("b4",))  # the hand going in
+        assert not samplers._retreat_ok(base, 0.2, approach, arm, "b4", grasp)  # and out
+    finally:
+        samplers.close()
 
 
 def test_motion_queries_report_execution_seconds(

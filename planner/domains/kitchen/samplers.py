@@ -41,6 +41,8 @@ class SamplerConfig:
 
     placement_attempts: int = 30  # poses tried per placement query
     placement_gap: float = 0.01  # metres kept between blocks on a platform
+    corner_fraction: float = 0.75  # placement tries packed square into a corner, the rest uniform
+    corner_jitter: float = 0.01  # metres a packed block may sit in from its corner
     ik_attempts: int = 12  # collision-free base poses tried per IK query
     base_attempts: int = 30  # candidate base poses drawn for each of those
     reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
@@ -166,17 +168,27 @@ class KitchenSamplers:
         if xmax - xmin < size or ymax - ymin < size:
             return None
         poses = dict(self.world._placed)
-        for _ in range(self.config.placement_attempts):
-            yaw = self.rng.uniform(-math.pi, math.pi)
+        cfg = self.config
+        for _ in range(cfg.placement_attempts):
+            # Mostly packed square into a random corner, so that a small platform (the stove)
+            # still has room for the next block; sometimes anywhere, for variety.
+            corner = self.rng.random() < cfg.corner_fraction
+            if corner:
+                yaw = wrap_angle(self.rng.randrange(4) * math.pi / 2 + self.rng.uniform(-0.1, 0.1))
+            else:
+                yaw = self.rng.uniform(-math.pi, math.pi)
             half = size / 2 * (abs(math.cos(yaw)) + abs(math.sin(yaw)))  # of the turned square
             if xmax - xmin < 2 * half or ymax - ymin < 2 * half:
                 continue
-            pose = BlockPose(
-                self.rng.uniform(xmin + half, xmax - half),
-                self.rng.uniform(ymin + half, ymax - half),
-                plat.top + size / 2,
-                yaw,
-            )
+            if corner:
+                x = self.rng.choice((xmin + half, xmax - half))
+                y = self.rng.choice((ymin + half, ymax - half))
+                x += math.copysign(self.rng.uniform(0.0, cfg.corner_jitter), (xmin + xmax) / 2 - x)
+                y += math.copysign(self.rng.uniform(0.0, cfg.corner_jitter), (ymin + ymax) / 2 - y)
+            else:
+                x = self.rng.uniform(xmin + half, xmax - half)
+                y = self.rng.uniform(ymin + half, ymax - half)
+            pose = BlockPose(x, y, plat.top + size / 2, yaw)
             poses[block] = pose
             self.world.set_blocks(poses)
             if not self.world.block_collides(block, margin=self.config.placement_gap):
@@ -217,6 +229,9 @@ class KitchenSamplers:
                 approach = arm_ik(self.arm, pre[0], pre[1], torso=torso, nearest_to=arm)
                 if not approach or not self._straight_ok(base, torso, approach[0], arm, touching):
                     continue
+                out = approach[0]
+                if not placing and not self._retreat_ok(base, torso, out, arm, block, grasp):
+                    continue
                 conf = Conf(base, torso, arm, approach[0])
                 world.set_conf(conf, approach=True)
                 # Motion planning starts and ends here, so it must keep the same clearance.
@@ -246,6 +261,26 @@ class KitchenSamplers:
             if self.world.robot_collides(ignore=touching):
                 return False
         return True
+
+    def _retreat_ok(
+        self,
+        base: BaseConf,
+        torso: float,
+        approach: tuple[float, ...],
+        arm: tuple[float, ...],
+        block: str,
+        grasp: Grasp,
+    ) -> bool:
+        """Picking, the hand leaves along the same straight line with the block in it: the block
+        must not sweep through its neighbours (going in, the hand was empty)."""
+        placed = dict(self.world._placed)
+        self.world.set_conf(Conf(base, torso, arm))
+        self.world.hold(block, grasp)
+        try:
+            return self._straight_ok(base, torso, arm, approach, ())
+        finally:
+            self.world.hold(None)
+            self.world.set_blocks(placed)
 
     def _sample_base(self, pose: BlockPose) -> BaseConf | None:
         """A base pose facing the block, within reach, its footprint clear of every fixture."""
