@@ -106,17 +106,23 @@ def test_crowded_stove_makes_placement_fail() -> None:
     assert careless < 0.1, (empty, packed, careless)
 
 
-def test_four_blocks_fit_on_the_stove_one_after_another() -> None:
-    """The placement sampler packs blocks into corners: on the 22 cm stove, where one block put
-    in the middle leaves no room, four blocks placed in turn almost always fit."""
-    _, problem = problem_for_scene("kitchen-4", seed=0)
-    samplers = KitchenSamplers(problem.values[GEOMETRY_KEY], random.Random(3))  # type: ignore[arg-type]
+@pytest.mark.parametrize("scene", ["kitchen-4", "kitchen-6", "kitchen-8"])
+def test_every_block_fits_on_the_stove_one_after_another(scene: str) -> None:
+    """The placement sampler packs blocks on a grid from the corners: on each kitchen's stove
+    (kitchen-4's 22 cm one, where a block put in the middle leaves no room), all the scene's
+    blocks placed in turn mostly fit, as every plan that cooks them all needs (one try in four
+    stays uniform, and a uniform block near the middle can still crowd out the rest: the search
+    then re-samples). Uniform tries alone fit four blocks on kitchen-4's stove in none of 20."""
+    _, problem = problem_for_scene(scene, seed=0)
+    geometry = problem.values[GEOMETRY_KEY]
+    blocks = [b.name for b in geometry.blocks]  # type: ignore[attr-defined]
+    samplers = KitchenSamplers(geometry, random.Random(3))  # type: ignore[arg-type]
     fitted = 0
     try:
         for _ in range(20):
             values: dict[str, object] = {}
             state: set[Atom] = set()
-            for i, block in enumerate(("b1", "b2", "b3", "b4")):
+            for i, block in enumerate(blocks):
                 context = StreamContext(frozenset(state), values)
                 out = samplers.sample_placement(block, "stove", context=context)
                 if out is None:
@@ -127,7 +133,7 @@ def test_four_blocks_fit_on_the_stove_one_after_another() -> None:
                 fitted += 1
     finally:
         samplers.close()
-    assert fitted >= 18, fitted
+    assert fitted >= 14, f"{scene}: all {len(blocks)} blocks fitted in {fitted} of 20 tries"
 
 
 def test_ik_refuses_a_pick_whose_retreat_drags_the_block_into_the_table() -> None:

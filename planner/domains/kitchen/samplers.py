@@ -41,8 +41,8 @@ class SamplerConfig:
 
     placement_attempts: int = 30  # poses tried per placement query
     placement_gap: float = 0.01  # metres kept between blocks on a platform
-    corner_fraction: float = 0.75  # placement tries packed square into a corner, the rest uniform
-    corner_jitter: float = 0.01  # metres a packed block may sit in from its corner
+    corner_fraction: float = 0.75  # placement tries on the packing grid, the rest uniform
+    corner_jitter: float = 0.01  # metres a packed block may sit in from its grid slot
     ik_attempts: int = 12  # collision-free base poses tried per IK query
     base_attempts: int = 30  # candidate base poses drawn for each of those
     reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
@@ -75,6 +75,15 @@ SIDE_PITCH = 0.4  # radians below horizontal for side grasps
 
 
 BASE_HALF_WIDTH = 0.334  # half the PR2 base's side: no fixture may come closer to its centre
+
+
+def _slots(lo: float, hi: float, pitch: float) -> list[float]:
+    """Centres from ``lo`` to ``hi`` (both ends, the platform's edges) at least ``pitch`` apart:
+    as many blocks as fit in a row, the outer ones against the edges."""
+    n = int((hi - lo) // pitch) + 1 if hi > lo else 1
+    if n == 1:
+        return [(lo + hi) / 2]
+    return [lo + i * (hi - lo) / (n - 1) for i in range(n)]
 
 
 def _rect_distance(x: float, y: float, rect: tuple[float, float, float, float]) -> float:
@@ -170,8 +179,8 @@ class KitchenSamplers:
         poses = dict(self.world._placed)
         cfg = self.config
         for _ in range(cfg.placement_attempts):
-            # Mostly packed square into a random corner, so that a small platform (the stove)
-            # still has room for the next block; sometimes anywhere, for variety.
+            # Mostly square to the platform on a grid that starts in its corners, so that a
+            # small platform (the stove) keeps room for the next block; sometimes anywhere.
             corner = self.rng.random() < cfg.corner_fraction
             if corner:
                 yaw = wrap_angle(self.rng.randrange(4) * math.pi / 2 + self.rng.uniform(-0.1, 0.1))
@@ -181,8 +190,9 @@ class KitchenSamplers:
             if xmax - xmin < 2 * half or ymax - ymin < 2 * half:
                 continue
             if corner:
-                x = self.rng.choice((xmin + half, xmax - half))
-                y = self.rng.choice((ymin + half, ymax - half))
+                pitch = 2 * half + cfg.placement_gap + 2 * cfg.corner_jitter
+                x = self.rng.choice(_slots(xmin + half, xmax - half, pitch))
+                y = self.rng.choice(_slots(ymin + half, ymax - half, pitch))
                 x += math.copysign(self.rng.uniform(0.0, cfg.corner_jitter), (xmin + xmax) / 2 - x)
                 y += math.copysign(self.rng.uniform(0.0, cfg.corner_jitter), (ymin + ymax) / 2 - y)
             else:
