@@ -127,12 +127,16 @@ def run_trials(
         if on_result is not None:
             on_result(r)
         elapsed = time.perf_counter() - start
-        solved = [x for x in results if x.status == "solved"]
         eta = elapsed / len(results) * (len(trials) - len(results))
-        median = statistics.median(x.planning_s or 0 for x in solved) if solved else 0.0
+        parts = []
+        for planner in dict.fromkeys(x.trial.planner for x in results):  # first-seen order
+            mine = [x for x in results if x.trial.planner == planner]
+            solved = [x.planning_s or 0.0 for x in mine if x.status == "solved"]
+            median = f"{statistics.median(solved):.0f} s" if solved else "-"
+            parts.append(f"{planner} {len(solved)}/{len(mine)} solved (median planning {median})")
         say(
-            f"[{len(results)}/{len(trials)}] solved {len(solved)}, median planning "
-            f"{median:.0f} s, elapsed {_fmt(elapsed)}, about {_fmt(eta)} left"
+            f"[{len(results)}/{len(trials)}] {', '.join(parts)}; elapsed {_fmt(elapsed)}, "
+            f"about {_fmt(eta)} left"
         )
 
     if ray_address is None:

@@ -312,9 +312,51 @@ def render_html(summary: dict[str, Any]) -> str:
         + head
         + table
         + "".join(parts)
+        + _seed_table(summary)
         + "<details><summary>Data (JSON)</summary><pre>"
         + html.escape(json.dumps(summary, indent=1))
         + "</pre></details></body></html>"
+    )
+
+
+def _seed_table(summary: dict[str, Any]) -> str:
+    """Every trial: status and seconds per planner, each linked to its run on the dashboard
+    (served from the same database: ``tamp serve --db``). Seeds some planner did not solve are
+    listed first."""
+    planners = list(summary["planners"])
+
+    def cell(t: dict[str, Any]) -> str:
+        if not t or t.get("status") is None:
+            return "<td>-</td>"
+        status = html.escape(str(t["status"]))
+        text = (
+            f"{t['planning']:.1f} + {t['execution']:.1f}"
+            if t["status"] == "solved"
+            else f"<b style='color:#c62828'>{status}</b>"
+        )
+        if t.get("error"):
+            text += f" <small>{html.escape(str(t['error'])[:120])}</small>"
+        if t.get("run_id"):
+            rid = html.escape(str(t["run_id"]))
+            text = f"<a href='/#run={rid}' title='run {rid}'>{text}</a>"
+        return f"<td>{text}</td>"
+
+    rows = sorted(
+        summary["trials"],
+        key=lambda r: (all(r.get(p, {}).get("status") == "solved" for p in planners), r["seed"]),
+    )
+    head = "".join(f"<th>{html.escape(p)}: planning + execution s</th>" for p in planners)
+    body = "".join(
+        f"<tr><td>{r['seed']}</td>{''.join(cell(r.get(p, {})) for p in planners)}</tr>"
+        for r in rows
+    )
+    unsolved = sum(
+        1 for r in rows if not all(r.get(p, {}).get("status") == "solved" for p in planners)
+    )
+    return (
+        f"<details><summary>Per seed ({len(rows)} seeds; the {unsolved} some planner did not "
+        "solve first; links open the run on the dashboard serving this database)</summary>"
+        f"<table><tr><th>seed</th>{head}</tr>{body}</table></details>"
     )
 
 

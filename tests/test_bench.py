@@ -104,6 +104,7 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
     page = render_html(summary)
     assert "Plotly" in page and "sequential vs baseline" in page  # figures and the paired table
     assert "baseline (x)" in page
+    assert page.count("href='/#run=") == 4  # every trial links to its run on the dashboard
 
     out = tmp_path / "report.html"
     assert main(["report", local_id, "--db", str(local_db), "--out", str(out)]) == 0

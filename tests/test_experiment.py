@@ -33,9 +33,16 @@ def test_trials_are_recorded_and_reproducible(tmp_path: Path) -> None:
 
 def test_a_crashing_trial_is_recorded_and_the_batch_goes_on(tmp_path: Path) -> None:
     trials = [Trial(LINE, 1, "baseline", 30.0), Trial("kitchen-99", 1, "baseline", 30.0)]
-    results = {r.trial.scene: r for r in run_trials(trials, tmp_path / "c.db", workers=1)}
+    lines: list[str] = []
+    results = {
+        r.trial.scene: r
+        for r in run_trials(trials, tmp_path / "c.db", workers=1, progress=lines.append)
+    }
     assert results["kitchen-99"].status == "failed"
     assert "unknown scene" in (results["kitchen-99"].error or "")
     assert results[LINE].status == "solved"
     statuses = {r.scene: r.status for r in RunStore(tmp_path / "c.db").list_runs()}
     assert statuses == {"kitchen-99": "failed", LINE: "solved"}
+    # The progress line counts per planner, so a failure shows where it happened.
+    assert lines[-1].startswith("[2/2] baseline 1/2 solved (median planning ")
+    assert "about 0 s left" in lines[-1]
