@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import signal
 import sys
 from collections import Counter
 from collections.abc import Callable, Sequence
@@ -595,6 +596,21 @@ def _model_errors() -> tuple[type[Exception], ...]:
     return (ModelError,)
 
 
+LONG_COMMANDS = ("plan", "collect", "bench", "train")
+
+
+def _interrupt_on_term() -> None:
+    """SIGTERM (``kill``, a job scheduler) stops a long command the way Ctrl-C does: the run or
+    benchmark is finished as cancelled / interrupted with what it has, trial processes are
+    stopped, and ``--resume`` picks up. A command started with ``&`` from a script ignores
+    Ctrl-C, so this is the way to stop it cleanly."""
+
+    def stop(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -602,6 +618,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
     )
+    if args.command in LONG_COMMANDS:
+        _interrupt_on_term()
     try:
         return COMMANDS[args.command](args)
     except _model_errors() as exc:

@@ -127,3 +127,46 @@ def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> No
         run_bench(db, resume="nope")
     assert json.loads(json.dumps(summarize(db, bench_id)))["planners"]["baseline"]["trials"] == 2
     assert os.path.exists(db)
+
+
+@pytest.mark.slow
+def test_sigterm_stops_a_benchmark_cleanly_and_it_resumes(tmp_path: Path) -> None:
+    """`kill` on a running `tamp bench` (the way to stop one started with `&`, which ignores
+    Ctrl-C) marks it interrupted, keeps the trials that finished, stops the trial processes,
+    and --resume runs only the rest."""
+    import signal
+    import subprocess
+    import sys
+
+    db = tmp_path / "k.db"
+    cmd = [sys.executable, "-m", "planner.cli", "bench", "--scene", LINE, "--db", str(db)]
+    proc = subprocess.Popen(
+        [*cmd, "--planners", "baseline", "--trials", "8", "--budget", "60", "--workers", "1"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stderr is not None
+    for line in proc.stderr:  # wait for the first finished trial
+        if line.startswith("[1/8]"):
+            break
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err[-2000:]
+    with RunStore(db) as store:
+        (bench,) = store.list_benches()
+        assert bench.status == "interrupted"
+        kept = len(store.bench_trials(bench.id))
+    assert 1 <= kept < 8
+    done = subprocess.run(
+        [sys.executable, "-m", "planner.cli", "bench", "--resume", bench.id, "--db", str(db)],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert f"[{8 - kept}/{8 - kept}]" in done.stderr  # only what was missing
+    with RunStore(db) as store:
+        assert len(store.bench_trials(bench.id)) == 8
+        assert store.get_bench(bench.id).status == "done"

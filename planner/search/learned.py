@@ -24,6 +24,7 @@ INFEASIBLE_PRIOR = 0.3  # least chance that a binding makes its next stream impo
 INFEASIBLE_MAX = 0.95  # most chance of it, before trying (1 - P_S when the model is doubtful)
 ITERATION_S = 0.05  # seconds of search (descent, predictions, events) around each query
 P_FLOOR = 1e-6  # lowest success chance after failures (keeps Eq. 1 finite)
+DEAD_END_MAX = 0.95  # most chance that a query not yet made is a dead end
 
 
 @dataclass(frozen=True)
@@ -34,6 +35,7 @@ class StreamCost:
     r_s: float
     r_f: float
     r_m: float
+    p_prior: float | None = None  # the stream's success rate over all its training queries
 
     @property
     def expected(self) -> float:
@@ -41,10 +43,29 @@ class StreamCost:
         p = min(max(self.p_s, P_MIN), 1.0)
         return self.r_s + self.r_m + (1.0 - p) / p * self.r_f
 
+    @property
+    def dead_end(self) -> float:
+        """Chance that the query fails whatever is retried here: the part of the predicted
+        failure beyond the stream's usual rate, which comes from this query's inputs and scene
+        (a stove already crowded, a pose out of reach) rather than from chance. 0 without a
+        prior rate."""
+        if self.p_prior is None or self.p_prior <= 0.0:
+            return 0.0
+        p = min(max(self.p_s, P_MIN), 1.0)
+        return min(max(1.0 - p / self.p_prior, 0.0), DEAD_END_MAX)
+
 
 def remaining_cost(costs: Sequence[StreamCost]) -> float:
     """Eq. 4: expected seconds for the rest of a stream plan."""
     return sum(c.expected for c in costs)
+
+
+def with_dead_ends(cost: float, feasible: float) -> float:
+    """Eq. 4 when the rest of the plan is feasible from here with chance ``feasible`` (the
+    product of 1 - dead-end chance over its streams): a dead end means choosing again here and
+    paying for the rest again, so the expected cost is ``cost / feasible`` (Eq. 1 one level
+    up)."""
+    return cost / max(feasible, 1.0 - DEAD_END_MAX)
 
 
 def after_attempts(cost: StreamCost, successes: int, failures: int) -> float:
@@ -158,7 +179,8 @@ class LearnedPolicy:
             self._terms[node.id] = list(zip(keys, ours, strict=True))
             if keys and keys[0] is not None:  # the node's children are attempts of this query
                 self._groups.setdefault(keys[0], []).append(node.id)
-            self._q[node.id] = remaining_cost(ours)
+            feasible = math.prod(1.0 - c.dead_end for c in ours)
+            self._q[node.id] = with_dead_ends(remaining_cost(ours), feasible)
             if ours and self.on_prediction is not None:
                 self.on_prediction(node, ours[0], self._q[node.id])
 
@@ -170,15 +192,16 @@ class LearnedPolicy:
         self._predict(tree, [node])
         if not self._evidence:
             return self._q[node.id]
-        total = 0.0
+        total, feasible = 0.0, 1.0
         for key, cost in self._terms[node.id]:
             seen = self._evidence.get(key) if key is not None else None
             if seen is None:
                 total += cost.expected
-            else:
+                feasible *= 1.0 - cost.dead_end
+            else:  # a success proves it feasible; failures only: after_attempts weighs them
                 ok, failed = seen
                 total += after_attempts(cost, ok, failed)
-        return total
+        return with_dead_ends(total, feasible)
 
     def _refresh(self, tree: Tree) -> None:
         """Count the outcomes of every query made, then estimate every node: the lowest Q in

@@ -14,7 +14,14 @@ from planner.abstract import AbstractConfig, plan_abstract
 from planner.domains import problem_for_scene
 from planner.events import Emitter, ListSink, ModelPrediction
 from planner.search.binding import stream_contexts
-from planner.search.learned import P_MIN, LearnedPolicy, StreamCost, remaining_cost
+from planner.search.learned import (
+    DEAD_END_MAX,
+    P_MIN,
+    LearnedPolicy,
+    StreamCost,
+    remaining_cost,
+    with_dead_ends,
+)
 from planner.search.mcts import TreeSearch
 from planner.search.tree import ROOT
 
@@ -27,6 +34,33 @@ def test_equation_1_and_4() -> None:
     clamped = StreamCost(0.0, 1.0, 2.0, 0.0).expected
     assert clamped == pytest.approx(1 + (1 - P_MIN) / P_MIN * 2)
     assert remaining_cost([StreamCost(0.5, 1, 2, 3), StreamCost(1, 1, 5, 0)]) == pytest.approx(7)
+
+
+def test_dead_ends_scale_the_rest_of_the_plan() -> None:
+    """A prediction below the stream's usual success rate is a dead end in that part: with
+    chance F that the rest is feasible, Eq. 4's cost is paid 1 / F times."""
+    usual = StreamCost(0.6, 1.0, 1.0, 0.0, p_prior=0.6)
+    assert usual.dead_end == 0.0  # failing as often as usual is chance, not a dead end
+    assert StreamCost(0.9, 1.0, 1.0, 0.0, p_prior=0.6).dead_end == 0.0
+    crowded = StreamCost(0.15, 1.0, 1.0, 0.0, p_prior=0.6)
+    assert crowded.dead_end == pytest.approx(0.75)  # 1 - 0.15 / 0.6
+    assert StreamCost(0.0, 1.0, 1.0, 0.0, p_prior=0.6).dead_end == pytest.approx(DEAD_END_MAX)
+    assert StreamCost(0.1, 1.0, 1.0, 0.0).dead_end == 0.0  # no prior rate: Eq. 4 as it is
+    assert with_dead_ends(10.0, 0.25) == pytest.approx(40.0)
+    assert with_dead_ends(10.0, 0.0) == pytest.approx(10.0 / (1 - DEAD_END_MAX))
+    # The crowded stove: a placement that fails in milliseconds barely moves Eq. 4, so a branch
+    # whose last placement will not fit looks cheaper than one with a longer motion ...
+    crowded = [StreamCost(0.05, 0.001, 0.001, 0.0, p_prior=0.9), StreamCost(1.0, 1.0, 0.0, 0.0)]
+    clear = [StreamCost(0.9, 0.001, 0.001, 0.0, p_prior=0.9), StreamCost(1.0, 1.5, 0.0, 0.0)]
+    assert remaining_cost(crowded) < remaining_cost(clear)
+
+    def q(costs: list[StreamCost]) -> float:
+        feasible = 1.0
+        for c in costs:
+            feasible *= 1.0 - c.dead_end
+        return with_dead_ends(remaining_cost(costs), feasible)
+
+    assert q(crowded) > 5 * q(clear)  # ... and with dead ends it is the one to avoid
 
 
 class ReachOracle:
