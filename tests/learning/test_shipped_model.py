@@ -25,25 +25,19 @@ def test_shipped_model_predicts_every_kitchen_stream() -> None:
         assert np.all(pred.r_s >= 0) and np.all(pred.r_f >= 0) and np.all(pred.r_m >= 0)
 
 
-def test_missing_model_is_a_clear_error() -> None:
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "planner.cli",
-            "plan",
-            "--scene",
-            "kitchen-1",
-            "--planner",
-            "learned",
-            "--model",
-            "/nonexistent/model.pt",
-            "--no-record",
-        ],
+def _plan(*args: str) -> subprocess.CompletedProcess[str]:
+    """`tamp plan ARGS --no-record` in a fresh interpreter, as a user runs it."""
+    return subprocess.run(
+        [sys.executable, "-m", "planner.cli", "plan", *args, "--no-record"],
         capture_output=True,
         text=True,
         check=False,
+        timeout=600,
     )
+
+
+def test_missing_model_is_a_clear_error() -> None:
+    proc = _plan("--scene", "kitchen-1", "--planner", "learned", "--model", "/nonexistent/model.pt")
     assert proc.returncode == 2
     assert "/nonexistent/model.pt" in proc.stderr and "Traceback" not in proc.stderr
 
@@ -52,26 +46,7 @@ def test_missing_model_is_a_clear_error() -> None:
 def test_shipped_model_solves_kitchen_4_seed_0() -> None:
     """The learned planner works out of the box: `tamp plan --scene kitchen-4 --planner learned
     --seed 0` finds a plan with the shipped model, and the plan replays in simulation."""
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "planner.cli",
-            "plan",
-            "--scene",
-            "kitchen-4",
-            "--planner",
-            "learned",
-            "--seed",
-            "0",
-            "--no-record",
-            "--json",
-        ],
-        capture_output=True,
-        text=True,
-        check=False,
-        timeout=600,
-    )
+    proc = _plan("--scene", "kitchen-4", "--planner", "learned", "--seed", "0", "--json")
     assert proc.returncode == 0, proc.stderr[-2000:]
     summary = json.loads(proc.stdout[proc.stdout.index("{") :])
     assert summary["status"] == "solved", summary
