@@ -56,17 +56,24 @@ def seed_ompl(seed: int) -> None:
     _seeded.append(seed)
 
 
-def _solve(ss: og.SimpleSetup, config: MotionConfig, seed: int | None) -> og.PathGeometric | None:
+def _solve(
+    ss: og.SimpleSetup, start: ob.State, goal: ob.State, config: MotionConfig, seed: int | None
+) -> og.PathGeometric | None:
     if seed is not None:
         seed_ompl(seed)
     si = ss.getSpaceInformation()
     si.setStateValidityCheckingResolution(config.resolution)
-    ss.setPlanner(PLANNERS[config.planner](si))
-    solved = ss.solve(config.timeout_s)
-    if not solved or not ss.haveExactSolutionPath():
-        return None
-    ss.simplifySolution(config.timeout_s / 2)  # bounded: unbounded simplifying took seconds
-    path: og.PathGeometric = ss.getSolutionPath()
+    si.setup()
+    if si.checkMotion(start, goal):
+        # The straight move is free: the shortest path, and no tree to grow.
+        path = og.PathGeometric(si, start, goal)
+    else:
+        ss.setPlanner(PLANNERS[config.planner](si))
+        solved = ss.solve(config.timeout_s)
+        if not solved or not ss.haveExactSolutionPath():
+            return None
+        ss.simplifySolution(config.timeout_s / 2)  # bounded: unbounded simplifying took seconds
+        path = ss.getSolutionPath()
     if config.waypoints:
         path.interpolate(config.waypoints)
     return path
@@ -100,7 +107,7 @@ def plan_base_motion(
         state.setY(conf[1])
         state.setYaw(math.remainder(conf[2], 2 * math.pi))
     ss.setStartAndGoalStates(s0, s1)
-    path = _solve(ss, config, seed)
+    path = _solve(ss, s0, s1, config, seed)
     if path is None:
         return None
     return [(s.getX(), s.getY(), s.getYaw()) for s in path.getStates()]
@@ -132,7 +139,7 @@ def plan_joint_motion(
     for i in range(n):
         s0[i], s1[i] = start[i], goal[i]
     ss.setStartAndGoalStates(s0, s1)
-    path = _solve(ss, config, seed)
+    path = _solve(ss, s0, s1, config, seed)
     if path is None:
         return None
     return [tuple(s[i] for i in range(n)) for s in path.getStates()]

@@ -17,8 +17,16 @@ def wall(c: tuple[float, float, float]) -> bool:
     return not (abs(c[0]) < 0.3 and c[1] < 1.0)
 
 
+def inflated_wall(c: tuple[float, float, float]) -> bool:
+    """The wall grown by 3 cm, the planner's collision-check step: like the kitchen's clearance,
+    the margin that keeps discretely checked straight moves off the true wall."""
+    return not (abs(c[0]) < 0.33 and c[1] < 1.03)
+
+
 def test_base_path_goes_around_the_wall() -> None:
-    path = plan_base_motion((-1.0, 0.0, 0.0), (1.0, 0.0, math.pi / 2), wall, bounds=(-2, 2, -2, 2))
+    path = plan_base_motion(
+        (-1.0, 0.0, 0.0), (1.0, 0.0, math.pi / 2), inflated_wall, bounds=(-2, 2, -2, 2)
+    )
     assert path is not None
     assert path[0] == pytest.approx((-1.0, 0.0, 0.0))
     assert path[-1] == pytest.approx((1.0, 0.0, math.pi / 2))
@@ -28,6 +36,14 @@ def test_base_path_goes_around_the_wall() -> None:
             t = i / 50
             x, y = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
             assert wall((x, y, 0.0)), (x, y)
+    # Close to the shortest way round (1.23 + 0.66 + 1.23 m past the inflated corners).
+    length = sum(math.dist(a[:2], b[:2]) for a, b in itertools.pairwise(path))
+    assert length < 1.35 * 3.12
+
+
+def test_free_straight_move_is_one_segment() -> None:
+    path = plan_base_motion((-1, 0, 0), (1.0, 0.5, 0.3), lambda c: True, bounds=(-2, 2, -2, 2))
+    assert path == [pytest.approx((-1.0, 0.0, 0.0)), pytest.approx((1.0, 0.5, 0.3))]
 
 
 def test_blocked_goal_fails_within_its_time_limit() -> None:
