@@ -20,11 +20,13 @@ from planner.pddl.structs import Atom
 from planner.search.tree import ROOT, Node, Tree
 
 P_MIN = 0.02  # P_S is clamped here: a stream never looks hopeless (Eq. 1 divides by it)
+P_MAX = 0.98  # ... nor certain, once it has failed (or led only to dead ends) from a node
 INFEASIBLE_PRIOR = 0.3  # least chance that a binding makes its next stream impossible
 INFEASIBLE_MAX = 0.95  # most chance of it, before trying (1 - P_S when the model is doubtful)
 ITERATION_S = 0.05  # seconds of search (descent, predictions, events) around each query
 P_FLOOR = 1e-6  # lowest success chance after failures (keeps Eq. 1 finite)
 DEAD_END_MAX = 0.95  # most chance that a query not yet made is a dead end
+DEAD_END_DOUBT = 0.1  # a run of failures less likely than this under P_S means a dead end
 
 
 @dataclass(frozen=True)
@@ -86,11 +88,19 @@ def after_attempts(cost: StreamCost, successes: int, failures: int) -> float:
         p_eff = (2.0 * p + successes) / (2.0 + successes + failures)
     else:
         # A stream the model expects to fail is likelier to be impossible from here.
+        p = min(p, P_MAX)
         infeasible = min(max(INFEASIBLE_PRIOR, 1.0 - p), INFEASIBLE_MAX)
         feasible = (1.0 - infeasible) * (1.0 - p) ** failures
         p_eff = p * feasible / (feasible + infeasible)
     p_eff = max(p_eff, P_FLOOR)
     return cost.r_s + cost.r_m + (1.0 - p_eff) / p_eff * (cost.r_f + ITERATION_S)
+
+
+def dead_after(p_s: float, *, doubt: float = DEAD_END_DOUBT) -> int:
+    """Failures in a row after which a query predicted to succeed with ``p_s`` is taken for a
+    dead end: the least n with (1 - p_s)^n < ``doubt`` (3 for IK's 0.65, 11 for 0.2)."""
+    p = min(max(p_s, P_MIN), P_MAX)
+    return max(1, math.ceil(math.log(doubt) / math.log(1.0 - p)))
 
 
 class Predictor(Protocol):
@@ -205,16 +215,18 @@ class LearnedPolicy:
 
     def _refresh(self, tree: Tree) -> None:
         """Count the outcomes of every query made, then estimate every node: the lowest Q in
-        its subtree (progress counts; a dead end below raises its Q until another branch is
-        cheaper). Children come after their parents, so one pass from the last id does it."""
+        its subtree, dead ends left out (progress counts; a dead end below raises its Q until
+        another branch is cheaper). Children come after their parents, so one pass from the
+        last id does it."""
         self._predict(tree, [n for n in tree.nodes[1:] if n.success])
+        dead = self._dead_ends(tree)
         # Outcomes only, never seconds measured: the same seed makes the same search.
         evidence: dict[str, tuple[int, int]] = {}
         for key, makers in self._groups.items():
             ok = failed = 0
             for n in makers:
                 for c in tree[n].children:
-                    if tree[c].success:
+                    if tree[c].success and c not in dead:
                         ok += 1
                     else:
                         failed += 1
@@ -226,11 +238,60 @@ class LearnedPolicy:
             if not node.success:
                 continue
             best = self.q(tree, node)
-            for c in node.children:
-                if c in est and est[c] < best:
+            if node.id in dead:  # every continuation is taken to fail: going on costs 1 / 0.05 x
+                est[node.id] = with_dead_ends(best, 0.0)
+                continue
+            for c in node.children:  # a dead end's subtree no longer vouches for its parent
+                if c in est and c not in dead and est[c] < best:
                     best = est[c]
             est[node.id] = best
         self._est = est
+
+    def _relevant(self, node: Node) -> set[str]:
+        """Objects the outcome of ``node``'s next query depends on: its inputs and the objects of
+        the state facts that make up its identity (see :meth:`_key`)."""
+        inst = self.skeletons[node.plan_index].stream_plan[node.depth]
+        facts = self.states[node.plan_index][node.depth]
+        out = set(inst.inputs)
+        for a in facts:
+            if a.predicate in self.fluents and a.predicate not in self.evidence_ignore:
+                out.update(a.args)
+        return out
+
+    def _dead_ends(self, tree: Tree) -> set[int]:
+        """Nodes whose every continuation is taken to fail. A node is a dead end when its next
+        query has failed, or led only to dead ends, more often in a row than its prediction
+        explains (:func:`dead_after`). Its reason is the objects those failures depend on; if the
+        node's own outputs are not among them, re-sampling them cannot help, so its parent is a
+        dead end too, and so on up to the node that bound something the failures depend on
+        (backjumping). A dead end counts as a failed attempt of its parent's query: a placement
+        that always succeeds but leaves no room for what comes next stops looking cheap to
+        re-sample (seed 1012: one block in the middle of the stove; the search re-placed the
+        next block 84 times without ever going back to it)."""
+        dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
+        for node in reversed(tree.nodes[1:]):
+            if node.id in dead or not node.success or node.depth == 0:
+                continue
+            terms = self._terms.get(node.id)
+            if not terms or not node.children:
+                continue  # complete, or not queried from yet
+            if any(tree[c].success and c not in dead for c in node.children):
+                continue
+            if len(node.children) < dead_after(terms[0][1].p_s):
+                continue
+            reason = self._relevant(node)
+            for c in node.children:
+                if c in dead:
+                    reason |= dead[c] - set(tree[c].outputs)
+            current = node
+            dead[current.id] = reason
+            while not (set(current.outputs) & reason) and current.parent is not None:
+                parent = tree[current.parent]
+                if parent.depth == 0 or parent.id == ROOT:
+                    break
+                dead[parent.id] = reason
+                current = parent
+        return set(dead)
 
     def _estimate(self, tree: Tree, node: Node) -> float:
         """The lowest Q in the node's subtree (as of the last refresh)."""

@@ -196,3 +196,39 @@ def test_the_same_query_from_two_nodes_pools_its_outcomes() -> None:
     after = [policy.q(tree, n) for n in (first, twin, other)]
     assert after[0] > before[0] and after[1] == pytest.approx(after[0])  # the twin learns too
     assert after[2] == pytest.approx(before[2])  # another query does not
+
+
+def test_a_dead_end_blames_the_last_choice_it_depends_on() -> None:
+    """Backjumping: b's poses fail their reach test whatever is tried, and the test depends on
+    where a stands (a fact of its state); the choices in between bind nothing it reads, so the
+    doubt lands on a's pose, and sampling a new pose for a becomes the better action."""
+    search, policy = make(ListSink())
+    tree = search.tree
+    plan = search.skeletons[0]
+    streams = [s.stream for s in plan.stream_plan]
+    assert streams[:6] == ["test-reachable", "sample-pose", "test-reachable"] * 2
+    a_pose, b_pose = plan.stream_plan[1].outputs[0], plan.stream_plan[4].outputs[0]
+    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    choose_a = tree.add(top.id, plan_index=0, depth=1, success=True)  # next: a's pose
+    placed_a = tree.add(choose_a.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0})
+    reached_a = tree.add(placed_a.id, plan_index=0, depth=3, success=True)
+    choose_b = tree.add(reached_a.id, plan_index=0, depth=4, success=True)  # next: b's pose
+    poses_b = [
+        tree.add(choose_b.id, plan_index=0, depth=5, success=True, outputs={b_pose: x})
+        for x in (1.5, 2.1)
+    ]
+    for node in (top, choose_a, placed_a, reached_a, choose_b, *poses_b):
+        node.visits = 3
+    policy.pick_plan(tree)
+    assert not policy.expand(tree, choose_a)  # a's pose looks fine: go on with it
+    q_before = policy.q(tree, choose_a)
+    # One of b's poses fails its reach test: that stays with b's pose (the other is untried).
+    tree.add(poses_b[0].id, plan_index=0, depth=6, success=False)
+    policy.pick_plan(tree)
+    assert policy.q(tree, choose_a) == pytest.approx(q_before)
+    assert not policy.expand(tree, choose_a)
+    # Both fail, more than P_S = 1 explains: every pose for b fails with a where it is.
+    tree.add(poses_b[1].id, plan_index=0, depth=6, success=False)
+    policy.pick_plan(tree)
+    assert policy.q(tree, choose_a) > 2 * q_before
+    assert policy.expand(tree, choose_a)  # now: sample another pose for a
