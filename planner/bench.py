@@ -9,9 +9,10 @@ trial is recorded at once, so ``--resume BENCH_ID`` runs only what is missing.
 
 from __future__ import annotations
 
+import hashlib
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -106,7 +107,7 @@ def check(config: BenchConfig) -> dict[str, Any]:
     assert config.model is not None
     model = CostModel.load(config.model, domain=loaded.spec.name)  # ModelError: other domain
     trained: dict[str, list[int]] | None = model.metadata.get("training_seeds")
-    info = {"model": config.model, "training_seeds": trained}
+    info = {"model": config.model, "model_sha256": _sha256(config.model), "training_seeds": trained}
     if trained is None:
         log.warning("model %s does not say which seeds trained it", config.model)
         return info
@@ -119,6 +120,30 @@ def check(config: BenchConfig) -> dict[str, Any]:
             f"(it saw {min(trained[config.scene])}-{max(trained[config.scene])})"
         )
     return info
+
+
+def _sha256(path: str | Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def locate_model(config: BenchConfig, sha256: str | None) -> BenchConfig:
+    """The benchmark's model file when it is resumed: the recorded path if its content is
+    unchanged, else the shipped model if that is the same file (a benchmark started from another
+    checkout); a model that changed or is gone is refused, so one benchmark never mixes two."""
+    if config.model is None or sha256 is None:
+        return config  # not learned, or recorded before models were hashed
+    recorded = Path(config.model)
+    if recorded.is_file() and _sha256(recorded) == sha256:
+        return config
+    if DEFAULT_MODEL.is_file() and _sha256(DEFAULT_MODEL) == sha256:
+        log.info("model %s: using the identical shipped model %s", config.model, DEFAULT_MODEL)
+        return replace(config, model=str(DEFAULT_MODEL))
+    state = "has changed" if recorded.is_file() else "is gone"
+    raise BenchError(
+        f"the benchmark's model {config.model} {state} (it started with sha256 {sha256[:12]}), "
+        "and the shipped model is a different one: resume with that model file in place, or "
+        "start a new benchmark"
+    )
 
 
 def trial_order(config: BenchConfig) -> list[Trial]:
@@ -151,7 +176,9 @@ def run_bench(
                 previous = store.get_bench(resume)
             except KeyError as exc:  # the message lists the known benchmarks
                 raise BenchError(exc.args[0]) from exc
-            config = BenchConfig.from_dict(previous.config)
+            config = locate_model(
+                BenchConfig.from_dict(previous.config), previous.config.get("model_sha256")
+            )
             bench_id = resume
             done = {(t.seed, t.planner) for t in store.bench_trials(bench_id)}
             check(config)  # the scene or the model file may have changed since

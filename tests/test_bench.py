@@ -9,7 +9,15 @@ from pathlib import Path
 
 import pytest
 
-from planner.bench import BenchConfig, BenchError, check, make_config, run_bench, trial_order
+from planner.bench import (
+    BenchConfig,
+    BenchError,
+    check,
+    locate_model,
+    make_config,
+    run_bench,
+    trial_order,
+)
 from planner.cli import main
 from planner.learning.model import CostModel
 from planner.report import render_html, summarize
@@ -62,6 +70,25 @@ def test_the_model_must_fit_the_scene_and_not_have_seen_its_seeds(tmp_path: Path
     )
     with pytest.raises(Exception, match="domain"):
         check(other_domain)
+
+
+def test_a_resumed_benchmark_finds_its_model_by_content(tmp_path: Path) -> None:
+    """Resuming from another checkout: the recorded model path is gone, but the shipped model is
+    the same file; a model whose content changed is refused (one benchmark, one model)."""
+    elsewhere = tmp_path / "old-checkout" / "kitchen.pt"
+    elsewhere.parent.mkdir()
+    elsewhere.write_bytes(DEFAULT_MODEL.read_bytes())
+    config = make_config(
+        "kitchen-4", ["learned"], trials=1, seed_start=1000, budget_s=10, model=str(elsewhere)
+    )
+    sha = check(config)["model_sha256"]
+    assert locate_model(config, sha) == config
+    elsewhere.unlink()
+    assert locate_model(config, sha).model == str(DEFAULT_MODEL)
+    elsewhere.write_bytes(b"retrained")
+    with pytest.raises(BenchError, match=r"kitchen.pt has changed .* start a new benchmark"):
+        locate_model(config, "0" * 64)
+    assert locate_model(config, None) == config  # recorded before models were hashed
 
 
 def test_trials_are_paired_and_interleaved() -> None:
