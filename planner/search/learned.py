@@ -1,8 +1,9 @@
 """The learned policy (Bradley & Roy): UCT over the expected remaining cost of a stream plan.
 
-A node's value is -Q, Q the expected seconds still to spend on its plan (Eq. 4): for each
-remaining stream, R_S + R_M + (1 - P_S) / P_S * R_F, predicted by per-stream models from the
-stream's inputs (zero and masked where not bound yet) and the scene. "Query this stream again"
+A node's value is -Q, Q the expected seconds still to spend on its plan: the execution
+seconds of the trajectories bound on its path, plus Eq. 4: for each remaining stream,
+R_S + R_M + (1 - P_S) / P_S * R_F, predicted by per-stream models from the stream's inputs
+(zero and masked where not bound yet) and the scene. "Query this stream again"
 is scored by the same formula, so there is no progressive-widening rule. The models are reached
 through the :class:`Predictor` protocol, so this module needs no torch.
 """
@@ -130,6 +131,7 @@ class LearnedPolicy:
     on_prediction: Callable[[Node, StreamCost, float], None] | None = None
     evidence_ignore: frozenset[str] = frozenset()  # fluents left out of a query's identity
     _q: dict[int, float] = field(default_factory=dict)  # Eq. 4 before any attempt
+    _bound: dict[int, float] = field(default_factory=dict)  # execution seconds bound so far
     _terms: dict[int, list[tuple[str | None, StreamCost]]] = field(default_factory=dict)
     _groups: dict[str, list[int]] = field(default_factory=dict)  # query -> nodes that make it
     _evidence: dict[str, tuple[int, int]] = field(default_factory=dict)  # ok, failed
@@ -190,12 +192,15 @@ class LearnedPolicy:
             if keys and keys[0] is not None:  # the node's children are attempts of this query
                 self._groups.setdefault(keys[0], []).append(node.id)
             feasible = math.prod(1.0 - c.dead_end for c in ours)
-            self._q[node.id] = with_dead_ends(remaining_cost(ours), feasible)
+            self._bound[node.id] = sum(tree[i].execution_s for i in tree.path(node.id))
+            self._q[node.id] = self._bound[node.id] + with_dead_ends(remaining_cost(ours), feasible)
             if ours and self.on_prediction is not None:
                 self.on_prediction(node, ours[0], self._q[node.id])
 
     def q(self, tree: Tree, node: Node) -> float:
-        """Expected remaining seconds of ``node``'s plan from its next stream on: Eq. 4 over
+        """Expected seconds still to spend on ``node``'s plan: executing the trajectories
+        already bound on its path (planning time spent is sunk, but the robot has yet to run
+        them, so a sibling with a shorter trajectory is cheaper), plus Eq. 4 over
         the predictions (made once per node), each term updated by the outcomes of the same
         query already made anywhere in the tree (same inputs, same relevant state; see
         :func:`after_attempts`), as counted at the last refresh."""
@@ -211,7 +216,7 @@ class LearnedPolicy:
             else:  # a success proves it feasible; failures only: after_attempts weighs them
                 ok, failed = seen
                 total += after_attempts(cost, ok, failed)
-        return with_dead_ends(total, feasible)
+        return self._bound[node.id] + with_dead_ends(total, feasible)
 
     def _refresh(self, tree: Tree) -> None:
         """Count the outcomes of every query made, then estimate every node: the lowest Q in

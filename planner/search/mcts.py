@@ -207,6 +207,7 @@ class TreeSearch:
             success=result.success,
             outputs=outputs,
             query_wall_s=result.wall_s,
+            execution_s=result.execution_s if result.success else 0.0,
         )
         self.queries.append((child.id, result))
         if result.success:

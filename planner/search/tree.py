@@ -25,6 +25,7 @@ class Node:
     visits: int = 0
     value: float = 0.0
     query_wall_s: float = 0.0  # seconds of the query that made this node
+    execution_s: float = 0.0  # seconds the robot will take to execute what that query bound
 
 
 @dataclass
@@ -45,6 +46,7 @@ class Tree:
         success: bool,
         outputs: dict[str, Any] | None = None,
         query_wall_s: float = 0.0,
+        execution_s: float = 0.0,
     ) -> Node:
         node = Node(
             len(self.nodes),
@@ -57,6 +59,7 @@ class Tree:
             0,
             0.0,
             query_wall_s,
+            execution_s,
         )
         self.nodes.append(node)
         self.nodes[parent].children.append(node.id)

@@ -232,3 +232,46 @@ def test_a_dead_end_blames_the_last_choice_it_depends_on() -> None:
     policy.pick_plan(tree)
     assert policy.q(tree, choose_a) > 2 * q_before
     assert policy.expand(tree, choose_a)  # now: sample another pose for a
+
+
+def test_a_bound_trajectory_counts_its_execution_seconds() -> None:
+    """Total time is planning plus execution: of two bindings alike but for how long the robot
+    will take to execute them, the policy goes on with the shorter one, and a long one makes
+    binding it again worth its planning seconds."""
+    search, policy = make(ListSink())
+    tree = search.tree
+    plan = search.skeletons[0]
+    i = next(j for j, s in enumerate(plan.stream_plan) if s.stream == "sample-pose")
+    node = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    for depth in range(1, i + 1):
+        node = tree.add(node.id, plan_index=0, depth=depth, success=True)
+    pose = plan.stream_plan[i].outputs[0]
+    slow = tree.add(
+        node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=9.0
+    )
+    quick = tree.add(
+        node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=2.0
+    )
+    node.visits, slow.visits, quick.visits = 2, 1, 1
+    assert policy.q(tree, slow) - policy.q(tree, quick) == pytest.approx(7.0)
+    assert policy.pick_child(tree, node).id == quick.id
+    # Below the slow one, the seconds stay counted: progress does not hide them.
+    below = tree.add(slow.id, plan_index=0, depth=i + 2, success=True)
+    assert policy.q(tree, below) >= 9.0
+    # Alone, a binding that takes far longer to execute than sampling again costs is dropped.
+    other = tree.add(ROOT, plan_index=1, depth=0, success=True)
+    plan1 = search.skeletons[1]
+    k = next(j for j, s in enumerate(plan1.stream_plan) if s.stream == "sample-pose")
+    for depth in range(1, k + 1):
+        other = tree.add(other.id, plan_index=1, depth=depth, success=True)
+    lone = tree.add(
+        other.id,
+        plan_index=1,
+        depth=k + 1,
+        success=True,
+        outputs={plan1.stream_plan[k].outputs[0]: 1.5},
+        execution_s=60.0,
+    )
+    other.visits, lone.visits = 5, 5
+    policy.pick_plan(tree)
+    assert policy.expand(tree, other)
