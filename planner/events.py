@@ -199,7 +199,7 @@ class ModelPrediction(_EventBase):
     r_s: float  # seconds of a successful query
     r_f: float  # seconds of a failed query
     r_m: float  # seconds to execute the produced trajectory
-    q: float  # expected remaining cost (seconds) of the node's stream plan; finite
+    q: float  # expected seconds still to spend: bound execution + Eq. 4 of the rest; finite
 
     def _validate(self) -> None:
         self._non_negative("node_id", "r_s", "r_f", "r_m")

@@ -696,7 +696,7 @@ function renderInspector() {
             <th title="seconds of a successful query">R<sub>S</sub></th><td>${seconds(p.r_s)}</td></tr>
         <tr><th title="seconds of a failed query">R<sub>F</sub></th><td>${seconds(p.r_f)}</td>
             <th title="seconds to execute the trajectory">R<sub>M</sub></th><td>${seconds(p.r_m)}</td></tr>
-        <tr><th title="expected remaining cost, Eq. 4">Q</th><td colspan="3"><b>${seconds(p.q)}</b></td></tr>
+        <tr><th title="expected seconds still to spend: execution of the trajectories bound so far + Eq. 4 for the rest">Q</th><td colspan="3"><b>${seconds(p.q)}</b></td></tr>
       </table>`
     : `<p class="muted" data-testid="inspector-prediction">No model prediction${noModels}.</p>`;
   const plan = tree.plans?.plans?.find((pl) => pl.index === node.planIndex);
