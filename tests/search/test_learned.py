@@ -117,6 +117,16 @@ def make(sink: ListSink) -> tuple[TreeSearch, LearnedPolicy]:
     return search, policy
 
 
+def up_to_first_pose(tree: Any, plan: Any, plan_index: int) -> tuple[Any, int, str]:
+    """A branch of ``plan`` bound up to its first sample-pose query: (the node that makes that
+    query, the query's index, the pose object it binds)."""
+    i = next(j for j, s in enumerate(plan.stream_plan) if s.stream == "sample-pose")
+    node = tree.add(ROOT, plan_index=plan_index, depth=0, success=True)
+    for depth in range(1, i + 1):
+        node = tree.add(node.id, plan_index=plan_index, depth=depth, success=True)
+    return node, i, plan.stream_plan[i].outputs[0]
+
+
 def test_learned_search_solves_and_reports_predictions() -> None:
     sink = ListSink()
     search, policy = make(sink)
@@ -180,12 +190,7 @@ def test_failures_make_insisting_costlier_and_a_success_makes_it_cheaper() -> No
 def test_the_same_query_from_two_nodes_pools_its_outcomes() -> None:
     search, policy = make(ListSink())
     tree = search.tree
-    plan = search.skeletons[0]
-    i = next(j for j, s in enumerate(plan.stream_plan) if s.stream == "sample-pose")
-    node = tree.add(ROOT, plan_index=0, depth=0, success=True)
-    for depth in range(1, i + 1):
-        node = tree.add(node.id, plan_index=0, depth=depth, success=True)
-    pose = plan.stream_plan[i].outputs[0]
+    node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
     first = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 2.0})
     twin = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 2.0})
     other = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.0})
@@ -240,12 +245,7 @@ def test_a_bound_trajectory_counts_its_execution_seconds() -> None:
     binding it again worth its planning seconds."""
     search, policy = make(ListSink())
     tree = search.tree
-    plan = search.skeletons[0]
-    i = next(j for j, s in enumerate(plan.stream_plan) if s.stream == "sample-pose")
-    node = tree.add(ROOT, plan_index=0, depth=0, success=True)
-    for depth in range(1, i + 1):
-        node = tree.add(node.id, plan_index=0, depth=depth, success=True)
-    pose = plan.stream_plan[i].outputs[0]
+    node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
     slow = tree.add(
         node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=9.0
     )
@@ -259,18 +259,9 @@ def test_a_bound_trajectory_counts_its_execution_seconds() -> None:
     below = tree.add(slow.id, plan_index=0, depth=i + 2, success=True)
     assert policy.q(tree, below) >= 9.0
     # Alone, a binding that takes far longer to execute than sampling again costs is dropped.
-    other = tree.add(ROOT, plan_index=1, depth=0, success=True)
-    plan1 = search.skeletons[1]
-    k = next(j for j, s in enumerate(plan1.stream_plan) if s.stream == "sample-pose")
-    for depth in range(1, k + 1):
-        other = tree.add(other.id, plan_index=1, depth=depth, success=True)
+    other, k, pose1 = up_to_first_pose(tree, search.skeletons[1], 1)
     lone = tree.add(
-        other.id,
-        plan_index=1,
-        depth=k + 1,
-        success=True,
-        outputs={plan1.stream_plan[k].outputs[0]: 1.5},
-        execution_s=60.0,
+        other.id, plan_index=1, depth=k + 1, success=True, outputs={pose1: 1.5}, execution_s=60.0
     )
     other.visits, lone.visits = 5, 5
     policy.pick_plan(tree)
