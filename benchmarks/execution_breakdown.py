@@ -49,6 +49,11 @@ def main() -> int:
     args = parser.parse_args()
     rows: dict[tuple[int, str], tuple[float, float, float]] = {}
     with RunStore(args.db) as store:
+        try:
+            store.get_bench(args.bench_id)
+        except KeyError as exc:  # the message lists the known benchmarks
+            print(exc.args[0], file=sys.stderr)
+            return 2
         for t in store.bench_trials(args.bench_id):
             if t.status != "solved" or t.run_id is None:
                 continue
