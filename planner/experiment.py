@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+import os
 import statistics
 import sys
 import time
@@ -212,6 +213,10 @@ def _run_ray(
     if started_here:
         try:
             if address == "local":
+                # Ray runs its workers at nice 15; on a machine with other work the trials
+                # then starve (a 1 s top-k call took 86 s beside a running benchmark), and
+                # they would not be timed like the process pool's trials, which run at 0.
+                os.environ.setdefault("RAY_worker_niceness", "0")
                 ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
             else:
                 ray.init(address=address, log_to_driver=False)
