@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import subprocess
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from planner import __version__
 from planner.domains import problem_for_scene
 from planner.experiment import Trial, TrialResult, run_trials
 from planner.runs import DEFAULT_MODEL, PLANNERS, RunConfig
@@ -122,6 +124,30 @@ def check(config: BenchConfig) -> dict[str, Any]:
     return info
 
 
+def code_revision() -> str:
+    """The commit of the planner's code (``+dirty`` with uncommitted changes), or its version
+    outside a git checkout: what a benchmark's figures were produced with."""
+    root = Path(__file__).resolve().parent.parent
+    try:
+        rev = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no", "planner"],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return f"guided-tamp {__version__}"
+    return rev + ("+dirty" if dirty else "")
+
+
 def _sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
@@ -182,11 +208,26 @@ def run_bench(
             bench_id = resume
             done = {(t.seed, t.planner) for t in store.bench_trials(bench_id)}
             check(config)  # the scene or the model file may have changed since
+            code, started = code_revision(), previous.config.get("code")
+            if started is not None and code != started:
+                log.warning(
+                    "benchmark %s started with code %s and resumes with %s: its trials mix two "
+                    "versions of the planner",
+                    bench_id,
+                    started,
+                    code,
+                )
         else:
             assert config is not None
             info = check(config)
             bench_id = store.create_bench(
-                {**config.to_dict(), **info, "workers": workers, "ray_address": ray_address}
+                {
+                    **config.to_dict(),
+                    **info,
+                    "workers": workers,
+                    "ray_address": ray_address,
+                    "code": code_revision(),
+                }
             )
             done = set()
         store.set_bench_status(bench_id, "running")

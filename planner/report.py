@@ -301,7 +301,8 @@ def render_html(summary: dict[str, Any]) -> str:
         f"status {html.escape(summary['status'])}; started {summary['created_at']}"
         + (f", wall time {summary['wall_s'] / 60:.1f} min" if summary["wall_s"] else "")
         + "</p>"
-        f"<p>Model: {html.escape(str(config.get('model')))}; it was trained on "
+        f"<p>Code: {html.escape(str(config.get('code', 'not recorded')))}. "
+        f"Model: {html.escape(str(config.get('model')))}; it was trained on "
         f"{html.escape(trained_text)}. The benchmark's seeds were held out.</p>"
     )
     return (

@@ -13,6 +13,7 @@ from planner.bench import (
     BenchConfig,
     BenchError,
     check,
+    code_revision,
     locate_model,
     make_config,
     run_bench,
@@ -132,6 +133,7 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
     assert "Plotly" in page and "sequential vs baseline" in page  # figures and the paired table
     assert "baseline (x)" in page
     assert page.count("href='/#run=") == 4  # every trial links to its run on the dashboard
+    assert f"Code: {code_revision()}" in page  # the commit the figures came from
 
     out = tmp_path / "report.html"
     assert main(["report", local_id, "--db", str(local_db), "--out", str(out)]) == 0
