@@ -6,8 +6,16 @@ import itertools
 import math
 
 import pytest
+from ompl import base as ob
+from ompl import geometric as og
 
-from planner.sim.motion import MotionConfig, plan_base_motion, plan_joint_motion
+from planner.sim.motion import (
+    MotionConfig,
+    base_problem,
+    plan_base_motion,
+    plan_joint_motion,
+    shorten,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -65,6 +73,47 @@ def test_joint_path_respects_bounds_and_obstacle() -> None:
     assert path is not None and path[-1] == pytest.approx((1.0, 0.0))
     assert all(-1 <= v <= 2 for q in path for v in q)
     assert any(q[1] >= 0.9 for q in path)  # it went over the obstacle
+
+
+def _zigzag_round_the_wall() -> tuple[ob.SpaceInformation, og.PathGeometric]:
+    ss, _, _ = base_problem((-1, 0, 0), (1, 0, 0), inflated_wall, (-2, 2, -2, 2))
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(0.004)
+    si.setup()
+    path = og.PathGeometric(si)
+    for x, y in ((-1, 0), (-1.5, 1.5), (-0.5, 1.3), (0, 1.8), (0.2, 1.4), (1.5, 1.2), (1, 0)):
+        state = si.getStateSpace().allocState()
+        state.setX(x)
+        state.setY(y)
+        state.setYaw(0.0)
+        path.append(state)
+    return si, path
+
+
+def _xy(path: og.PathGeometric) -> list[tuple[float, float]]:
+    states = [path.getState(i) for i in range(path.getStateCount())]
+    return [(s.getX(), s.getY()) for s in states]
+
+
+def _length(points: list[tuple[float, float]]) -> float:
+    return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
+
+
+def test_shortening_pulls_a_detour_tight_and_keeps_it_valid() -> None:
+    si, raw = _zigzag_round_the_wall()  # 6.37 m; the shortest way round is 3.12 m
+    greedy = _xy(shorten(si, raw, 0))
+    si, raw = _zigzag_round_the_wall()
+    tight = _xy(shorten(si, raw, 100))
+    for points in (greedy, tight):
+        assert points[0] == pytest.approx((-1, 0)) and points[-1] == pytest.approx((1, 0))
+        for a, b in itertools.pairwise(points):
+            for i in range(51):
+                t = i / 50
+                assert wall((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), 0.0))
+    # Visibility jumps alone cut the corners between visible vertices; the partial shortcuts
+    # then pull the path onto the wall's corners.
+    assert _length(greedy) < 0.7 * 6.37
+    assert _length(tight) < 1.15 * 3.12 < _length(greedy)
 
 
 def test_unknown_planner_lists_the_known() -> None:
