@@ -75,6 +75,8 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=1, help="OMPL seed")
     parser.add_argument("--steps", type=int, default=MotionConfig().shortcut_steps)
     args = parser.parse_args()
+    if args.trials < 1 or args.steps < 0:
+        parser.error("--trials must be at least 1 and --steps at least 0")
     with RunStore(args.db) as store:
         try:
             bench = store.get_bench(args.bench_id)
