@@ -200,8 +200,9 @@ def _viewer_body(request: Any) -> dict[str, Any] | None:
     return None
 
 
-def _click_node(page: Any, node: dict[str, Any]) -> None:
-    """Zoom in on a node, click it on the canvas and check what the inspector shows."""
+def _click_node(page: Any, node: dict[str, Any], error: str | None = None) -> None:
+    """Zoom in on a node, click it on the canvas and check what the inspector shows: its
+    stream, outcome, seconds, and the query's error (a sampler that raised) if it had one."""
     page.click("#btn-last")
     page.click("#btn-fit")
     at = f"window.dashboard.nodePosition({node['node_id']})"
@@ -226,8 +227,11 @@ def _click_node(page: Any, node: dict[str, Any]) -> None:
     assert inspector.locator('[data-testid="inspector-outcome"]').inner_text() == outcome
     wall_cpu = inspector.locator('[data-testid="inspector-seconds"]').inner_text()
     assert re.fullmatch(r"[\d.]+ (µs|ms|s) / [\d.]+ (µs|ms|s)", wall_cpu), wall_cpu
-    if not node["success"]:
-        assert inspector.locator('[data-testid="inspector-error"]').is_visible()
+    shown = inspector.locator('[data-testid="inspector-error"]')
+    if error:
+        assert error in shown.inner_text()
+    else:  # a query that just found nothing (IK out of reach) has no error to show
+        assert not shown.is_visible()
 
 
 def _check_charts(page: Any, run: dict[str, Any], events: list[dict[str, Any]]) -> None:
@@ -364,7 +368,13 @@ def test_kitchen_baseline_run_grows_live(page: Any, server: Server) -> None:
 
     queried = [n for n in nodes if n["stream"] is not None]
     failed = [n for n in queried if not n["success"]]
-    _click_node(page, failed[-1] if failed else queried[-1])
+    clicked = failed[-1] if failed else queried[-1]
+    error = next(
+        e.get("error")
+        for e in events
+        if e["type"] == "stream_queried" and e["node_id"] == clicked["node_id"]
+    )
+    _click_node(page, clicked, error)
     _check_charts(page, run, events)
 
     page.click("#btn-fit")
