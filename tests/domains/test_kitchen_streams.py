@@ -4,6 +4,7 @@ stove makes placement fail, and validation catches broken plans."""
 from __future__ import annotations
 
 import random
+import statistics
 from dataclasses import replace
 from pathlib import Path
 
@@ -179,3 +180,43 @@ def test_motion_queries_report_execution_seconds(
     assert result.success and result.execution_s == pytest.approx(result.outputs[0].seconds)
     grasp = runtime.query("sample-grasp", ("b1",))
     assert grasp.success and grasp.execution_s == 0.0
+
+
+def _ik_travel(nearest: bool) -> tuple[list[float], int]:
+    """Straight-line seconds to the base poses IK finds for picking kitchen-4's blocks (seeds
+    0-1, two grasps from above) from three places the robot may come from, and the failures."""
+    from planner.domains.kitchen.samplers import _grasps, _straight_base_s
+    from planner.domains.kitchen.values import Conf
+    from planner.sim.pr2_model import REST_ARM_CONF
+
+    travel, failed = [], 0
+    for seed in (0, 1):
+        _, problem = problem_for_scene("kitchen-4", seed=seed)
+        config = replace(SamplerConfig(), nearest_base=nearest)
+        geometry = problem.values[GEOMETRY_KEY]
+        samplers = KitchenSamplers(geometry, random.Random(seed), config=config)  # type: ignore[arg-type]
+        try:
+            for block in ("b1", "b2", "b3", "b4"):
+                for here in ((0.0, 0.0, 0.0), (0.0, 0.6, 1.57), (0.0, -0.6, -1.57)):
+                    values = {"q": Conf(here, 0.2, REST_ARM_CONF["right"])}
+                    context = StreamContext(frozenset({Atom("at-conf", ("q",))}), values)
+                    for grasp in _grasps(0.07, 0.1)[:2]:  # from above
+                        pose = problem.values[f"p0-{block}"]
+                        found = samplers.inverse_kinematics(block, pose, grasp, context=context)  # type: ignore[arg-type]
+                        if found is None:
+                            failed += 1
+                        else:
+                            travel.append(_straight_base_s(here, found[0].base))
+        finally:
+            samplers.close()
+    return travel, failed
+
+
+def test_ik_stands_where_the_robot_gets_soonest() -> None:
+    """Knowing where the robot stands before it moves to the block, IK tries its base poses
+    nearest first: the move there is shorter than to the first pose drawn (which may be on the
+    far side of the table), and IK fails no more often."""
+    near, near_failed = _ik_travel(True)
+    blind, blind_failed = _ik_travel(False)
+    assert statistics.mean(near) < 0.9 * statistics.mean(blind), (near, blind)
+    assert near_failed == blind_failed <= 2

@@ -1,0 +1,153 @@
+"""Benchmark: does trying IK's base poses nearest first shorten execution?
+
+    .venv/bin/python benchmarks/base_choice.py --scene kitchen-4 --seeds 2000-2009 \
+        --planner baseline --budget 300 --workers 2
+
+Runs the same seeds with ``SamplerConfig.nearest_base`` off ("drawn": IK tries its base poses in
+the order drawn) and on ("nearest": in order of straight-line travel time from where the robot
+stands), the order of the two alternating from seed to seed so that machine noise hits them
+alike. Prints, per setting, solved trials and the mean planning, execution, total, base travel,
+arm and straight-line-bound seconds and query and motion-query counts over the seeds every
+setting solved, and the paired ratios (nearest / drawn) with bootstrap 95% intervals.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import random
+import statistics
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+from typing import Any
+
+from planner.runs import PLANNERS, RunConfig, run
+from planner.sim.pr2_model import BASE_VELOCITY
+from planner.sim.transforms import wrap_angle
+
+
+def _parse_seeds(text: str) -> list[int]:
+    if "-" in text:
+        lo, hi = (int(x) for x in text.split("-", 1))
+        return list(range(lo, hi + 1))
+    return [int(x) for x in text.split(",")]
+
+
+def _breakdown(values: dict[str, Any]) -> tuple[float, float, float]:
+    """(base seconds, arm seconds, straight-line bound of the base moves) of bound values."""
+    from planner.domains.kitchen.values import Trajectory
+
+    linear, angular = BASE_VELOCITY
+    base = arm = bound = 0.0
+    for value in values.values():
+        if not isinstance(value, Trajectory):
+            continue
+        for seg in value.segments:
+            if seg.kind == "base":
+                base += seg.seconds
+                a, b = seg.base[0], seg.base[-1]
+                bound += max(
+                    math.dist(a[:2], b[:2]) / linear, abs(wrap_angle(b[2] - a[2])) / angular
+                )
+            else:
+                arm += seg.seconds
+    return base, arm, bound
+
+
+SETTINGS = ("drawn", "nearest")
+
+
+def _trial(job: tuple[str, int, str, str, float]) -> tuple[int, str, dict[str, float] | None]:
+    scene, seed, setting, planner, budget = job
+    import planner.domains.kitchen.samplers as ks
+
+    original = ks.KitchenSamplers.__init__
+    config = replace(ks.SamplerConfig(), nearest_base=setting == "nearest")
+
+    def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
+        kw.setdefault("config", config)
+        original(self, geometry, rng, **kw)
+
+    ks.KitchenSamplers.__init__ = init  # type: ignore[method-assign]
+    try:
+        cfg = RunConfig(scene=scene, seed=seed, planner=planner, budget_s=budget)
+        result, _, _ = run(cfg)
+    finally:
+        ks.KitchenSamplers.__init__ = original  # type: ignore[method-assign]
+    if result.bound is None or result.execution_s is None:
+        return seed, setting, None
+    base, arm, bound = _breakdown(dict(result.bound.values))
+    return (
+        seed,
+        setting,
+        {
+            "planning": result.planning_s,
+            "execution": result.execution_s,
+            "total": result.planning_s + result.execution_s,
+            "base": base,
+            "arm": arm,
+            "bound": bound,
+            "queries": float(len(result.queries)),
+            "motions": float(sum(q.stream == "plan-motion" for q in result.queries)),
+        },
+    )
+
+
+def _ci(ratios: list[float], rng: random.Random, n: int = 2000) -> tuple[float, float]:
+    means = sorted(statistics.mean(rng.choices(ratios, k=len(ratios))) for _ in range(n))
+    return means[int(0.025 * n)], means[int(0.975 * n) - 1]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--scene", default="kitchen-4")
+    parser.add_argument("--seeds", default="2000-2009", help="range LO-HI or a list a,b,c")
+    parser.add_argument("--planner", default="baseline", choices=PLANNERS)
+    parser.add_argument("--budget", type=float, default=300.0)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    try:
+        seeds = _parse_seeds(args.seeds)
+    except ValueError:
+        parser.error("--seeds takes LO-HI or a,b,c (integers)")
+    if not seeds or args.workers < 1 or args.budget <= 0:
+        parser.error("need seeds, a positive budget and workers >= 1")
+    settings = list(SETTINGS)
+    logging.basicConfig(level=logging.WARNING)
+    jobs = []
+    for i, seed in enumerate(seeds):
+        order = settings if i % 2 == 0 else settings[::-1]
+        jobs += [(args.scene, seed, c, args.planner, args.budget) for c in order]
+    results: dict[tuple[int, str], dict[str, float] | None] = {}
+    with ProcessPoolExecutor(args.workers) as pool:
+        for n, (seed, setting, figures) in enumerate(pool.map(_trial, jobs), 1):
+            results[(seed, setting)] = figures
+            got = "unsolved" if figures is None else f"total {figures['total']:.1f} s"
+            print(f"[{n}/{len(jobs)}] seed {seed} {setting}: {got}", file=sys.stderr)
+    both = [s for s in seeds if all(results.get((s, c)) for c in settings)]
+    print(f"{args.scene}, {args.planner}, seeds {seeds[0]}-{seeds[-1]}; {len(both)} solved by all")
+    keys = ("planning", "execution", "total", "base", "arm", "bound", "queries", "motions")
+    print("| base poses | solved | " + " | ".join(keys) + " |")
+    print("|---" * (len(keys) + 2) + "|")
+    for c in settings:
+        solved = sum(results.get((s, c)) is not None for s in seeds)
+        means = [statistics.mean(results[(s, c)][k] for s in both) for k in keys]  # type: ignore[index]
+        cells = " | ".join(f"{m:.1f}" for m in means)
+        print(f"| {c} | {solved}/{len(seeds)} | {cells} |")
+    rng = random.Random(0)
+    ref = settings[0]
+    for c in settings[1:]:
+        for k in ("planning", "execution", "total", "base"):
+            ratios = [results[(s, c)][k] / results[(s, ref)][k] for s in both]  # type: ignore[index]
+            if not ratios:
+                continue
+            lo, hi = _ci(ratios, rng)
+            mean = statistics.mean(ratios)
+            print(f"{k}: {c} / {ref} = {mean:.3f} (95% CI {lo:.3f} to {hi:.3f})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
