@@ -28,6 +28,7 @@ ITERATION_S = 0.05  # seconds of search (descent, predictions, events) around ea
 P_FLOOR = 1e-6  # lowest success chance after failures (keeps Eq. 1 finite)
 DEAD_END_MAX = 0.95  # most chance that a query not yet made is a dead end
 DEAD_END_DOUBT = 0.1  # a run of failures less likely than this under P_S means a dead end
+DEAD_END_MIN = 2  # failures in a row before any node is taken for a dead end
 
 
 @dataclass(frozen=True)
@@ -99,9 +100,13 @@ def after_attempts(cost: StreamCost, successes: int, failures: int) -> float:
 
 def dead_after(p_s: float, *, doubt: float = DEAD_END_DOUBT) -> int:
     """Failures in a row after which a query predicted to succeed with ``p_s`` is taken for a
-    dead end: the least n with (1 - p_s)^n < ``doubt`` (3 for IK's 0.65, 11 for 0.2)."""
+    dead end: the least n with (1 - p_s)^n < ``doubt`` (3 for IK's 0.65, 11 for 0.2), and never
+    fewer than :data:`DEAD_END_MIN`. The models are over-confident where success is chance: a
+    placement predicted at 0.98 fails when its try lands where a block already stands, and
+    taking that one failure for a dead end threw away a fully bound stove (kitchen-4 seed 1000:
+    the search left a plan bound to its last placement for another plan, 51 s of motions)."""
     p = min(max(p_s, P_MIN), P_MAX)
-    return max(1, math.ceil(math.log(doubt) / math.log(1.0 - p)))
+    return max(DEAD_END_MIN, math.ceil(math.log(doubt) / math.log(1.0 - p)))
 
 
 class Predictor(Protocol):

@@ -19,6 +19,7 @@ from planner.search.learned import (
     P_MIN,
     LearnedPolicy,
     StreamCost,
+    dead_after,
     remaining_cost,
     with_dead_ends,
 )
@@ -227,12 +228,17 @@ def test_a_dead_end_blames_the_last_choice_it_depends_on() -> None:
     policy.pick_plan(tree)
     assert not policy.expand(tree, choose_a)  # a's pose looks fine: go on with it
     q_before = policy.q(tree, choose_a)
-    # One of b's poses fails its reach test: that stays with b's pose (the other is untried).
-    tree.add(poses_b[0].id, plan_index=0, depth=6, success=False)
+    # One of b's poses fails its reach test twice in a row (one failure is never a dead end):
+    # that stays with b's pose (the other is untried).
+    for _ in range(2):
+        tree.add(poses_b[0].id, plan_index=0, depth=6, success=False)
     policy.pick_plan(tree)
     assert policy.q(tree, choose_a) == pytest.approx(q_before)
     assert not policy.expand(tree, choose_a)
     # Both fail, more than P_S = 1 explains: every pose for b fails with a where it is.
+    tree.add(poses_b[1].id, plan_index=0, depth=6, success=False)
+    policy.pick_plan(tree)
+    assert policy.q(tree, choose_a) == pytest.approx(q_before)  # once is chance
     tree.add(poses_b[1].id, plan_index=0, depth=6, success=False)
     policy.pick_plan(tree)
     assert policy.q(tree, choose_a) > 2 * q_before
@@ -266,3 +272,13 @@ def test_a_bound_trajectory_counts_its_execution_seconds() -> None:
     other.visits, lone.visits = 5, 5
     policy.pick_plan(tree)
     assert policy.expand(tree, other)
+
+
+def test_one_failure_is_never_a_dead_end() -> None:
+    """However sure the model is, a node becomes a dead end only after failures in a row: one
+    failed placement predicted at 0.98 is chance (a try landing where a block stands), not a
+    reason to throw the bound plan away. Less likely streams need more failures (Eq.: the least
+    n with (1 - P_S)^n < 0.1)."""
+    assert dead_after(0.999) == dead_after(0.98) == 2
+    assert dead_after(0.65) == 3
+    assert dead_after(0.2) == 11
