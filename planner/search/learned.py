@@ -271,37 +271,60 @@ class LearnedPolicy:
     def _dead_ends(self, tree: Tree) -> set[int]:
         """Nodes whose every continuation is taken to fail. A node is a dead end when its next
         query has failed, or led only to dead ends, more often in a row than its prediction
-        explains (:func:`dead_after`). Its reason is the objects those failures depend on; if the
-        node's own outputs are not among them, re-sampling them cannot help, so its parent is a
-        dead end too, and so on up to the node that bound something the failures depend on
-        (backjumping). A dead end counts as a failed attempt of its parent's query: a placement
-        that always succeeds but leaves no room for what comes next stops looking cheap to
-        re-sample (seed 1012: one block in the middle of the stove; the search re-placed the
-        next block 84 times without ever going back to it)."""
+        explains (:func:`dead_after`), counting the same query made from other nodes (same
+        inputs, same relevant state: :meth:`_key`) as long as none of them succeeded. Its reason
+        is the objects those failures depend on; if the node's own outputs are not among them,
+        re-sampling them cannot help, so its parent is a dead end too, and so on up to the node
+        that bound something the failures depend on (backjumping). A dead end counts as a failed
+        attempt of its parent's query: a placement that always succeeds but leaves no room for
+        what comes next stops looking cheap to re-sample (seed 1012: one block in the middle of
+        the stove; the search re-placed the next block 84 times without ever going back to it).
+
+        Pooling matters when the query that fails comes after choices it does not read
+        (kitchen-4 seed 1000: the last block's stove placement failed once under each of 13
+        new grasps, IK solutions and motions of that block, and the crowded stove was never
+        blamed)."""
         dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
-        for node in reversed(tree.nodes[1:]):
-            if node.id in dead or not node.success or node.depth == 0:
-                continue
-            terms = self._terms.get(node.id)
-            if not terms or not node.children:
-                continue  # complete, or not queried from yet
-            if any(tree[c].success and c not in dead for c in node.children):
-                continue
-            if len(node.children) < dead_after(terms[0][1].p_s):
-                continue
-            reason = self._relevant(node)
-            for c in node.children:
-                if c in dead:
-                    reason |= dead[c] - set(tree[c].outputs)
-            current = node
-            dead[current.id] = reason
-            while not (set(current.outputs) & reason) and current.parent is not None:
-                parent = tree[current.parent]
-                if parent.depth == 0 or parent.id == ROOT:
-                    break
-                dead[parent.id] = reason
-                current = parent
+        for _ in range(8):  # new dead ends fail their parents' queries: pool again
+            pooled = self._pooled_failures(tree, dead)
+            before = len(dead)
+            for node in reversed(tree.nodes[1:]):
+                if node.id in dead or not node.success or node.depth == 0:
+                    continue
+                terms = self._terms.get(node.id)
+                if not terms or not node.children:
+                    continue  # complete, or not queried from yet
+                if any(tree[c].success and c not in dead for c in node.children):
+                    continue
+                key = terms[0][0]
+                failures = max(len(node.children), pooled.get(key, 0) if key is not None else 0)
+                if failures < dead_after(terms[0][1].p_s):
+                    continue
+                reason = self._relevant(node)
+                for c in node.children:
+                    if c in dead:
+                        reason |= dead[c] - set(tree[c].outputs)
+                current = node
+                dead[current.id] = reason
+                while not (set(current.outputs) & reason) and current.parent is not None:
+                    parent = tree[current.parent]
+                    if parent.depth == 0 or parent.id == ROOT:
+                        break
+                    dead[parent.id] = reason
+                    current = parent
+            if len(dead) == before:
+                break
         return set(dead)
+
+    def _pooled_failures(self, tree: Tree, dead: Mapping[int, set[str]]) -> dict[str, int]:
+        """Per query identity that never succeeded (dead ends aside): how often it has failed,
+        or led only to a dead end, over every node that made it."""
+        out: dict[str, int] = {}
+        for key, makers in self._groups.items():
+            children = [c for n in makers for c in tree[n].children]
+            if not any(tree[c].success and c not in dead for c in children):
+                out[key] = len(children)
+        return out
 
     def _estimate(self, tree: Tree, node: Node) -> float:
         """The lowest Q in the node's subtree (as of the last refresh)."""

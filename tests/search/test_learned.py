@@ -282,3 +282,49 @@ def test_one_failure_is_never_a_dead_end() -> None:
     assert dead_after(0.999) == dead_after(0.98) == 2
     assert dead_after(0.65) == 3
     assert dead_after(0.2) == 11
+
+
+class CrowdedOracle(ReachOracle):
+    """Like :class:`ReachOracle`, but sampling a pose fails one time in five, in milliseconds
+    (as a placement on a crowded stove does), and a reach test takes a second (as a motion
+    does)."""
+
+    def predict_rows(
+        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
+    ) -> list[StreamCost]:
+        out = super().predict_rows(rows)
+        return [
+            StreamCost(0.8, 0.001, 0.001, 0.0)
+            if stream == "sample-pose"
+            else StreamCost(cost.p_s, 1.0, 1.0, 0.0)
+            for (stream, _, _), cost in zip(rows, out, strict=True)
+        ]
+
+
+def test_the_same_query_failing_under_choices_it_does_not_read_is_a_dead_end() -> None:
+    """Failures of one query count together across the nodes that make it (same inputs, same
+    relevant state), as long as it never succeeded. b's pose fails to sample once after each of
+    two choices it does not read, and the doubt lands on a's pose. A failure that costs
+    milliseconds barely raises the cost of trying again, so only the dead end makes the search
+    go back (kitchen-4 seed 1000: the last stove placement failed once after each of 13 new
+    grasps, IK solutions and motions of that block, and the crowded stove was never blamed)."""
+    search, policy = make(ListSink())
+    policy.predictor = CrowdedOracle()
+    tree = search.tree
+    plan = search.skeletons[0]
+    a_pose = plan.stream_plan[1].outputs[0]
+    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    choose_a = tree.add(top.id, plan_index=0, depth=1, success=True)
+    placed_a = tree.add(choose_a.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0})
+    reached_a = tree.add(placed_a.id, plan_index=0, depth=3, success=True)
+    twins = [tree.add(reached_a.id, plan_index=0, depth=4, success=True) for _ in range(2)]
+    for node in (top, choose_a, placed_a, reached_a, *twins):
+        node.visits = 3
+    tree.add(twins[0].id, plan_index=0, depth=5, success=False)  # b's pose: no room
+    policy.pick_plan(tree)
+    q_before = policy.q(tree, choose_a)
+    assert not policy.expand(tree, choose_a)  # once is chance
+    tree.add(twins[1].id, plan_index=0, depth=5, success=False)  # the same query, again
+    policy.pick_plan(tree)
+    assert policy._estimate(tree, placed_a) > 5 * q_before
+    assert policy.expand(tree, choose_a)  # now: sample another pose for a
