@@ -192,7 +192,9 @@ def _run(
     )
     policy: Policy
     if config.planner == "learned":
-        policy = _learned_policy(config, loaded, abstract.plans, states, initial, fluents, emitter)
+        policy = _learned_policy(
+            config, loaded, problem, abstract.plans, states, initial, fluents, emitter
+        )
     else:
         policy = BaselinePolicy(BaselineConfig())
     search = TreeSearch(
@@ -206,6 +208,7 @@ def _run(
         progress=say,
         should_stop=should_stop,
         fluents=fluents,
+        static_context=loaded.static_context(problem),
     )
     outcome = search.run(deadline=deadline, start=start)
     queries = [r for _, r in outcome.queries]
@@ -236,6 +239,7 @@ def _run(
 def _learned_policy(
     config: RunConfig,
     loaded: LoadedDomain,
+    problem: Problem,
     plans: tuple[AbstractPlan, ...],
     states: list[list[frozenset[Atom]]],
     initial: dict[str, Any],
@@ -272,6 +276,7 @@ def _learned_policy(
         config_,
         on_prediction=report,
         evidence_ignore=frozenset(loaded.spec.evidence_ignore),
+        static_context=loaded.static_context(problem),
     )
 
 

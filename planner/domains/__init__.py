@@ -9,6 +9,7 @@ import random
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from planner.pddl.parser import load_domain, load_problem, load_streams
 from planner.pddl.structs import Domain, Problem, StreamSet
@@ -20,6 +21,7 @@ DOMAINS_DIR = Path(__file__).resolve().parent
 
 ProblemBuilder = Callable[[Scene, Domain, int], Problem]  # scene, domain, seed
 BindingFactory = Callable[[Problem, random.Random], Mapping[str, StreamAdapter]]
+StaticContext = Callable[[Problem], Mapping[str, Any]]  # JSON facts of the scene, per problem
 
 
 @dataclass(frozen=True)
@@ -33,6 +35,10 @@ class DomainSpec:
     # Fluents that do not change a stream's outcome: left out when the learned search pools the
     # outcomes of the same query made from different nodes (see LearnedPolicy).
     evidence_ignore: tuple[str, ...] = ()
+    # What every query's context carries besides its state (JSON; the kitchen: the footprints of
+    # its platforms and the sizes of its blocks, which a learned model needs to tell how much
+    # room a platform has left). Recorded with each query and given to the learned models.
+    static_context: StaticContext | None = None
 
     @property
     def directory(self) -> Path:
@@ -55,6 +61,12 @@ class LoadedDomain:
 
     def problem_from_file(self, path: str | Path) -> Problem:
         return load_problem(path, self.domain)
+
+    def static_context(self, problem: Problem) -> dict[str, Any]:
+        """The scene facts every query's context carries (empty for most domains)."""
+        if self.spec.static_context is None:
+            return {}
+        return dict(self.spec.static_context(problem))
 
     def runtime(self, problem: Problem, *, seed: int) -> StreamRuntime:
         """Samplers bound to the declared streams, seeded."""

@@ -15,6 +15,7 @@ zeroed for half the rows; Gaussian noise on every feature."""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Iterable, Mapping, Sequence
@@ -28,6 +29,7 @@ import numpy.typing as npt
 import torch
 from torch import nn
 
+from planner.domains import problem_for_scene
 from planner.learning.features import FEATURE_VERSION, Featurizer
 from planner.learning.model import (
     COST_HEADS,
@@ -39,6 +41,7 @@ from planner.learning.model import (
     StreamNetwork,
     torch_threads,
 )
+from planner.scene import SceneError
 from planner.store import QueryRecord, RunStore
 
 log = logging.getLogger(__name__)
@@ -78,12 +81,32 @@ class LoadedRecords(list[QueryRecord]):
         return {scene: sorted(seeds) for scene, seeds in sorted(out.items())}
 
 
+def _with_static_context(
+    query: QueryRecord, scene: str, cache: dict[str, dict[str, Any]]
+) -> QueryRecord:
+    """The query with its scene's static context (platform footprints, block sizes) where it
+    was recorded without one: stores written before queries carried it train the same model.
+    A scene that no longer loads leaves the query as it is (its room features stay unknown)."""
+    if scene not in cache:
+        try:
+            loaded, problem = problem_for_scene(scene, seed=0)
+            cache[scene] = loaded.static_context(problem)
+        except (OSError, ValueError, KeyError, SceneError) as exc:
+            log.warning("scene %s: no static context for its queries (%s)", scene, exc)
+            cache[scene] = {}
+    missing = {k: v for k, v in cache[scene].items() if k not in query.context}
+    if not missing:
+        return query
+    return dataclasses.replace(query, context={**missing, **query.context})
+
+
 def load_records(db_paths: Sequence[Path]) -> LoadedRecords:
     """Every stream query in the given run stores (SQLite files), in stored order."""
     records: list[QueryRecord] = []
     scenes: dict[str, str] = {}
     seeds: dict[str, int] = {}
     seen: set[tuple[str, int]] = set()
+    static: dict[str, dict[str, Any]] = {}  # scene -> its static context
     for raw in db_paths:
         path = Path(raw)
         if not path.is_file():
@@ -97,7 +120,7 @@ def load_records(db_paths: Sequence[Path]) -> LoadedRecords:
             if (q.run_id, q.seq) in seen:
                 continue  # the same store given twice
             seen.add((q.run_id, q.seq))
-            records.append(q)
+            records.append(_with_static_context(q, scenes[q.run_id], static))
         log.info("%s: %d stream queries", path, len(queries))
     return LoadedRecords(
         records, sources=[Path(p) for p in db_paths], run_scenes=scenes, run_seeds=seeds
@@ -292,12 +315,12 @@ class _Corruption:
     def of(cls, featurizer: Featurizer, stream: str) -> _Corruption:
         layout = featurizer.spec.layout(stream)
         slots = []
-        offset = 0
+        offset = 0  # the room-left features after the slots are never corrupted but by noise
         for slot in layout.slots if layout is not None else ():
             if slot.kind != "name":
                 slots.append((offset, slot.width))
             offset += slot.width
-        return cls(tuple(slots), (offset, featurizer.spec.scene_width))
+        return cls(tuple(slots), (featurizer.scene_offset(stream), featurizer.spec.scene_width))
 
     def apply(self, x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
         out = x.clone()

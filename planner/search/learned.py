@@ -29,6 +29,7 @@ P_FLOOR = 1e-6  # lowest success chance after failures (keeps Eq. 1 finite)
 DEAD_END_MAX = 0.95  # most chance that a query not yet made is a dead end
 DEAD_END_DOUBT = 0.1  # a run of failures less likely than this under P_S means a dead end
 DEAD_END_MIN = 2  # failures in a row before any node is taken for a dead end
+PRIOR_CHILDREN = 0.5  # how many observed children the model's guess of a new one weighs
 
 
 @dataclass(frozen=True)
@@ -135,12 +136,15 @@ class LearnedPolicy:
     config: LearnedConfig = field(default_factory=LearnedConfig)
     on_prediction: Callable[[Node, StreamCost, float], None] | None = None
     evidence_ignore: frozenset[str] = frozenset()  # fluents left out of a query's identity
+    static_context: Mapping[str, Any] = field(default_factory=dict)  # in every row's context
     _q: dict[int, float] = field(default_factory=dict)  # Eq. 4 before any attempt
     _bound: dict[int, float] = field(default_factory=dict)  # execution seconds bound so far
     _terms: dict[int, list[tuple[str | None, StreamCost]]] = field(default_factory=dict)
     _groups: dict[str, list[int]] = field(default_factory=dict)  # query -> nodes that make it
     _evidence: dict[str, tuple[int, int]] = field(default_factory=dict)  # ok, failed
     _est: dict[int, float] = field(default_factory=dict)  # lowest Q in each node's subtree
+    _fresh: dict[int, float] = field(default_factory=dict)  # predicted Q of a new child
+    _dead: set[int] = field(default_factory=set)  # dead ends, as of the last refresh
     _scale: float = 0.0
 
     # --- Q of a node -------------------------------------------------------------------------
@@ -156,6 +160,7 @@ class LearnedPolicy:
             facts = sorted(a for a in self.states[plan_index][i] if a.predicate in self.fluents)
             names = {x for a in facts for x in a.args}
             context = {
+                **self.static_context,
                 "facts": [[a.predicate, *a.args] for a in facts],
                 "values": {
                     n: self.encode(values[n])
@@ -199,6 +204,15 @@ class LearnedPolicy:
             feasible = math.prod(1.0 - c.dead_end for c in ours)
             self._bound[node.id] = sum(tree[i].execution_s for i in tree.path(node.id))
             self._q[node.id] = self._bound[node.id] + with_dead_ends(remaining_cost(ours), feasible)
+            if ours:  # a child binds the next stream: its execution and the rest remain
+                rest = ours[1:]
+                self._fresh[node.id] = (
+                    self._bound[node.id]
+                    + ours[0].r_m
+                    + with_dead_ends(
+                        remaining_cost(rest), math.prod(1.0 - c.dead_end for c in rest)
+                    )
+                )
             if ours and self.on_prediction is not None:
                 self.on_prediction(node, ours[0], self._q[node.id])
 
@@ -208,10 +222,12 @@ class LearnedPolicy:
         them, so a sibling with a shorter trajectory is cheaper), plus Eq. 4 over
         the predictions (made once per node), each term updated by the outcomes of the same
         query already made anywhere in the tree (same inputs, same relevant state; see
-        :func:`after_attempts`), as counted at the last refresh."""
+        :func:`after_attempts`), as counted at the last refresh, and calibrated by the children
+        the node already has (:meth:`_calibration`)."""
         self._predict(tree, [node])
+        shift = self._calibration(tree, node)
         if not self._evidence:
-            return self._q[node.id]
+            return self._q[node.id] + shift
         total, feasible = 0.0, 1.0
         for key, cost in self._terms[node.id]:
             seen = self._evidence.get(key) if key is not None else None
@@ -221,7 +237,28 @@ class LearnedPolicy:
             else:  # a success proves it feasible; failures only: after_attempts weighs them
                 ok, failed = seen
                 total += after_attempts(cost, ok, failed)
-        return self._bound[node.id] + with_dead_ends(total, feasible)
+        return self._bound[node.id] + with_dead_ends(total, feasible) + shift
+
+    def _calibration(self, tree: Tree, node: Node) -> float:
+        """How much worse (or better) the node's children came out than the models guessed for
+        a child before seeing one, shrunk towards 0 by :data:`PRIOR_CHILDREN`.
+
+        Predicted with an input masked, a stream's cost is an average over what that input
+        could be; once bound, it is the cost for this binding. The two need not agree: a move
+        whose end is not sampled yet is predicted as the average move (7.2 s for moves that
+        take 12.2 s), and a placement's chance of leaving room for the next block is high
+        until the placement is made. Without this, querying again from a node looks cheaper
+        than every child it has made, however many it makes: kitchen-4 seed 1027 re-sampled
+        the same three blocks' grasps, IK and motions for 300 s in the hope of shorter moves."""
+        fresh = self._fresh.get(node.id)
+        if fresh is None:
+            return 0.0
+        kids = [tree[c] for c in node.children if tree[c].success and c not in self._dead]
+        if not kids:
+            return 0.0
+        self._predict(tree, kids)
+        surprise = sum(self._q[c.id] - fresh for c in kids)
+        return surprise / (len(kids) + PRIOR_CHILDREN)
 
     def _refresh(self, tree: Tree) -> None:
         """Count the outcomes of every query made, then estimate every node: the lowest Q in
@@ -230,6 +267,7 @@ class LearnedPolicy:
         last id does it."""
         self._predict(tree, [n for n in tree.nodes[1:] if n.success])
         dead = self._dead_ends(tree)
+        self._dead = dead
         # Outcomes only, never seconds measured: the same seed makes the same search.
         evidence: dict[str, tuple[int, int]] = {}
         for key, makers in self._groups.items():

@@ -130,6 +130,7 @@ class TreeSearch:
         progress: Callable[[str], None] | None = None,
         should_stop: Callable[[], bool] | None = None,
         fluents: frozenset[str] = frozenset(),
+        static_context: Mapping[str, Any] | None = None,
     ) -> None:
         if not skeletons:
             raise ValueError("the search needs at least one stream plan")
@@ -145,6 +146,7 @@ class TreeSearch:
         self.progress = progress
         self.should_stop = should_stop
         self.fluents = fluents  # predicates recorded as the context of each query
+        self.static_context = dict(static_context or {})  # recorded with every query too
         self.tree = Tree()
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
@@ -237,7 +239,11 @@ class TreeSearch:
             for n in sorted(names)
             if n in context.values and not isinstance(context.values[n], str)
         }
-        return {"facts": [[a.predicate, *a.args] for a in facts], "values": values}
+        return {
+            **self.static_context,
+            "facts": [[a.predicate, *a.args] for a in facts],
+            "values": values,
+        }
 
     def _complete(self, node: Node) -> bool:
         return node.success and node.depth == len(self.skeletons[node.plan_index].stream_plan)

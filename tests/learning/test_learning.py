@@ -157,7 +157,39 @@ def test_rows_have_a_fixed_length_per_stream_and_mask_unbound_inputs(
     for stream, n in arity.items():
         row = featurizer.row(stream, [None] * n, {})
         assert row.shape == (featurizer.width(stream),)
-        assert row.sum() == n  # nothing bound, no scene: only the mask bits are set
+        # nothing bound, no scene: only the mask bits are set (and a placement's room unknown)
+        assert row.sum() == n + (stream == "sample-placement")
+
+
+def test_a_placement_sees_the_room_left_on_its_platform() -> None:
+    """The room features read the platform's footprint and the block's size from the context's
+    geometry: three blocks in three corners of a 22 cm stove leave the fourth corner free (its
+    centre 15 cm from theirs); one in the middle of an edge leaves no spot more than ~8 cm from
+    a block, too close for a 7 cm block that may be turned."""
+    featurizer = Featurizer.fit([])
+    names = featurizer.feature_names("sample-placement")
+    geometry = {"platforms": {"stove": [-0.11, 0.11, -1.26, -1.04]}, "blocks": {"b4": 0.07}}
+
+    def room(*xy: tuple[float, float]) -> tuple[float, float, float]:
+        blocks = [f"b{i}" for i in range(1, len(xy) + 1)]
+        context = {
+            "geometry": geometry,
+            "facts": [["on", b, "stove"] for b in blocks]
+            + [["at-pose", b, f"p{b}"] for b in blocks],
+            "values": {f"p{b}": _pose(x, y, 0.0) for b, (x, y) in zip(blocks, xy, strict=True)},
+        }
+        row = featurizer.row("sample-placement", ["b4", "stove"], context)
+        return tuple(float(row[names.index(f"room.{k}")]) for k in ("unknown", "cm", "blocks"))
+
+    corners = [(-0.075, -1.225), (0.075, -1.225), (-0.075, -1.075)]
+    unknown, free, n = room(*corners)
+    assert (unknown, n) == (0.0, 3.0) and free == pytest.approx(15.0)
+    _, crowded, _ = room((0.0, -1.225), (-0.075, -1.075), (0.075, -1.075))
+    assert crowded < 10.0  # on the 9 x 9 grid of centres: 9.4 cm
+    assert room()[1] == pytest.approx(30.0)  # an empty stove: plenty
+    # Without geometry (a store recorded before it was in the context): unknown.
+    row = featurizer.row("sample-placement", ["b4", "stove"], {"facts": [], "values": {}})
+    assert row[names.index("room.unknown")] == 1.0
 
 
 def test_scene_features_read_the_facts() -> None:

@@ -17,6 +17,7 @@ from planner.search.binding import stream_contexts
 from planner.search.learned import (
     DEAD_END_MAX,
     P_MIN,
+    LearnedConfig,
     LearnedPolicy,
     StreamCost,
     dead_after,
@@ -328,3 +329,36 @@ def test_the_same_query_failing_under_choices_it_does_not_read_is_a_dead_end() -
     policy.pick_plan(tree)
     assert policy._estimate(tree, placed_a) > 5 * q_before
     assert policy.expand(tree, choose_a)  # now: sample another pose for a
+
+
+def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> None:
+    """A new child is predicted from masked inputs; children that all come out seconds worse
+    (here: poses the model expects to execute in no time take 5 to 7 s) raise the cost of
+    querying again, so after a few the search goes on with the best one instead of sampling
+    for ever in the hope of the predicted average (kitchen-4 seed 1027)."""
+    search, policy = make(ListSink())
+    policy.config = LearnedConfig(c_explore=0.0)  # values only: no exploration bonus
+    tree = search.tree
+    node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
+    policy.pick_plan(tree)
+    alone = policy.q(tree, node)
+    kids = [
+        tree.add(
+            node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=s
+        )
+        for s in (7.0, 6.0)
+    ]
+    node.visits = 3
+    for kid in kids:
+        kid.visits = 1
+    policy.pick_plan(tree)
+    # the two surprises, 7 s and 6 s, over 2 children plus the half a child the guess weighs
+    assert policy.q(tree, node) == pytest.approx(alone + (7.0 + 6.0) / 2.5, abs=0.05)
+    assert policy.expand(tree, node)  # two so far: the model's guess still weighs
+    best = tree.add(
+        node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=5.0
+    )
+    best.visits, node.visits = 1, 4
+    policy.pick_plan(tree)
+    assert not policy.expand(tree, node)  # 5 s is as good as a new one is likely to be
+    assert policy.pick_child(tree, node).id == best.id

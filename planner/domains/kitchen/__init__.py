@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import random
 from collections.abc import Mapping
+from typing import Any
 
 from planner.domains import DomainSpec
-from planner.domains.kitchen.geometry import geometry_from_scene
+from planner.domains.kitchen.geometry import KitchenGeometry, geometry_from_scene
 from planner.domains.kitchen.values import Conf
 from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
 from planner.scene import Scene, goal_atoms
@@ -67,6 +68,20 @@ def initial_pose_name(block: str) -> str:
     return f"p0-{block}"
 
 
+def static_context(problem: Problem) -> dict[str, Any]:
+    """``{"geometry": {"platforms": {name: [xmin, xmax, ymin, ymax]}, "blocks": {name: edge}}}``:
+    the parts of the scene a learned model reads to tell how much room a platform has left."""
+    geometry = problem.values.get(GEOMETRY_KEY)
+    if not isinstance(geometry, KitchenGeometry):
+        raise ValueError(f"problem {problem.name}: no kitchen geometry in its values")
+    return {
+        "geometry": {
+            "platforms": {p.name: [round(v, 6) for v in p.footprint()] for p in geometry.platforms},
+            "blocks": {b.name: b.size for b in geometry.blocks},
+        }
+    }
+
+
 def _bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
     from planner.domains.kitchen.samplers import bindings  # pybullet only when sampling
 
@@ -80,4 +95,5 @@ SPEC = DomainSpec(
     diversity_ignore=("move",),  # moves only connect configurations; compare what is done
     # Where the robot stands and how it holds the block do not change where a block fits.
     evidence_ignore=("at-conf", "can-move", "holding"),
+    static_context=static_context,
 )
