@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import time
 import uuid
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -35,6 +36,7 @@ from sqlalchemy import (
     select,
     update,
 )
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 from sqlalchemy.pool import StaticPool
 
@@ -292,6 +294,23 @@ def _engine_for(url_or_path: str | Path | URL) -> Engine:
     return engine
 
 
+def _create_tables(engine: Engine, attempts: int = 10) -> None:
+    """Create the tables that are missing. Processes that open a new store at once race
+    between checking for a table and creating it (SQLite: "table runs already exists", or
+    "database is locked" when a reader's lock cannot be upgraded, which SQLite reports at once
+    rather than wait; two trials started together lost one of them): the loser checks again."""
+    for attempt in range(attempts):
+        try:
+            Base.metadata.create_all(engine)
+            return
+        except OperationalError as exc:
+            racing = "already exists" in str(exc) or "database is locked" in str(exc)
+            if not racing or attempt == attempts - 1:
+                raise
+            log.debug("run store: another process is creating the tables; checking again")
+            time.sleep(0.05 * (attempt + 1))
+
+
 class RunStore:
     """The record of every run. ``RunStore(path)`` opens (creating if needed) a SQLite file;
     a URL (``postgresql+psycopg://...``) opens any database SQLAlchemy speaks.
@@ -301,7 +320,7 @@ class RunStore:
 
     def __init__(self, url_or_path: str | Path | URL) -> None:
         self.engine = _engine_for(url_or_path)
-        Base.metadata.create_all(self.engine)
+        _create_tables(self.engine)
         log.debug("run store at %s", self.engine.url.render_as_string(hide_password=True))
 
     def __enter__(self) -> RunStore:

@@ -320,3 +320,37 @@ def test_in_memory_url_is_one_database_across_threads() -> None:
         _emit_search(Emitter(run_id, sink), 2)
         sink.close()
         assert len(store.events(run_id)) == 7
+
+
+def _open_at_once(path: Path, n: int) -> list[Exception]:
+    """``n`` threads open the store at ``path`` at the same moment and record a run each."""
+    import threading
+
+    barrier = threading.Barrier(n)
+    errors: list[Exception] = []
+
+    def open_and_record(seed: int) -> None:
+        barrier.wait()
+        try:
+            with RunStore(path) as store:
+                store.create_run("line-2", seed, "baseline", {})
+        except Exception as exc:
+            errors.append(exc)
+
+    threads = [threading.Thread(target=open_and_record, args=(s,)) for s in range(n)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return errors
+
+
+def test_many_openers_of_a_new_store_at_once_all_get_it(tmp_path: Path) -> None:
+    """Trials started together on a fresh store file race to create its tables; before, the
+    loser died with "table runs already exists" (or "database is locked") and its trial was
+    never recorded."""
+    for attempt in range(5):
+        path = tmp_path / f"fresh-{attempt}.db"
+        assert not _open_at_once(path, 4)
+        with RunStore(path) as store:
+            assert store.count_runs() == 4
