@@ -173,7 +173,8 @@ class StreamQueried(_EventBase):
     error: str | None  # why the sampler failed (raised, malformed output); None otherwise
     # The world the sampler saw: fluent facts of the plan's state where its output is first
     # needed, and the encoded values of their objects (what learned models read as global
-    # features): {"facts": [[predicate, arg, ...], ...], "values": {name: value}}.
+    # features): {"facts": [[predicate, arg, ...], ...], "values": {name: value}}, plus the
+    # domain's static context (the kitchen: {"geometry": {"platforms": ..., "blocks": ...}}).
     context: dict[str, Any] = field(default_factory=dict)
 
     def _validate(self) -> None:

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from planner.events import RunFinished, RunStarted, SolutionFound, StreamQueried
+from planner.learning.features import room_left
 from planner.runs import RunConfig, run
 from planner.store import RunStore, StoreSink
 
@@ -77,6 +78,19 @@ def test_plan_kitchen_1_writes_a_plan_that_validates(tmp_path: Path) -> None:
     assert check.returncode == 0 and "valid" in check.stdout
     record = RunStore(db).get_run(out["run_id"])
     assert record.status == "solved" and record.plan is not None
+    # Each query carries the scene's geometry, so a model can tell how much room a platform
+    # has left (the stove is 22 cm square in kitchen-1).
+    placements = [
+        q
+        for q in RunStore(db).stream_queries(run_ids=[out["run_id"]])
+        if q.stream == "sample-placement"
+    ]
+    assert placements
+    geometry = placements[0].context["geometry"]
+    xmin, xmax, ymin, ymax = geometry["platforms"]["stove"]
+    assert (xmax - xmin, ymax - ymin) == pytest.approx((0.22, 0.22))
+    assert geometry["blocks"] == {"b1": 0.07}
+    assert all(room_left(*q.inputs, q.context)[0] == 0.0 for q in placements)  # room known
 
 
 def test_budget_running_out_is_a_recorded_timeout(tmp_path: Path) -> None:

@@ -398,3 +398,43 @@ def test_loading_the_wrong_file_names_the_mismatch(
     torch.save({"weights": torch.zeros(3)}, text)
     with pytest.raises(ModelError, match="not a cost-model file"):
         CostModel.load(text)
+
+
+def test_a_store_recorded_without_geometry_gets_it_from_the_runs_scene(tmp_path: Path) -> None:
+    """Stores written before queries carried their scene's static context still train the
+    same model: loading fills it in from the run's scene (kitchen-1's 22 cm stove)."""
+    from planner.events import StreamQueried
+    from planner.learning.features import room_left
+    from planner.learning.train import load_records
+    from planner.store import RunStore
+
+    db = tmp_path / "old.db"
+    with RunStore(db) as store:
+        run_id = store.create_run("kitchen-1", 0, "baseline", {})
+        old_context = {"facts": [["holding", "b1", "g1"]], "values": {}}
+        store.write_events(
+            run_id,
+            [
+                StreamQueried(
+                    run_id=run_id,
+                    seq=0,
+                    t=0.1,
+                    node_id=2,
+                    stream="sample-placement",
+                    input_names=["b1", "stove"],
+                    inputs=["b1", "stove"],
+                    success=True,
+                    wall_s=0.001,
+                    cpu_s=0.001,
+                    execution_s=0.0,
+                    error=None,
+                    context=old_context,
+                )
+            ],
+        )
+    (record,) = load_records([db])
+    assert record.context["facts"] == old_context["facts"]
+    assert record.context["geometry"]["platforms"]["stove"] == pytest.approx(
+        [-0.11, 0.11, -1.26, -1.04]
+    )
+    assert room_left("b1", "stove", record.context) == [0.0, 30.0, 0.0]  # an empty stove
