@@ -99,15 +99,33 @@ def after_attempts(cost: StreamCost, successes: int, failures: int) -> float:
     return cost.r_s + cost.r_m + (1.0 - p_eff) / p_eff * (cost.r_f + ITERATION_S)
 
 
-def dead_after(p_s: float, *, doubt: float = DEAD_END_DOUBT) -> int:
+def dead_after(p_s: float, *, p_prior: float | None = None, doubt: float = DEAD_END_DOUBT) -> int:
     """Failures in a row after which a query predicted to succeed with ``p_s`` is taken for a
-    dead end: the least n with (1 - p_s)^n < ``doubt`` (3 for IK's 0.65, 11 for 0.2), and never
-    fewer than :data:`DEAD_END_MIN`. The models are over-confident where success is chance: a
-    placement predicted at 0.98 fails when its try lands where a block already stands, and
-    taking that one failure for a dead end threw away a fully bound stove (kitchen-4 seed 1000:
-    the search left a plan bound to its last placement for another plan, 51 s of motions)."""
+    dead end, never fewer than :data:`DEAD_END_MIN`. Whichever comes first:
+
+    - the run of failures is less likely than ``doubt`` under the prediction: the least n with
+      (1 - p_s)^n < ``doubt`` (3 for IK's 0.65, 11 for 0.2). The models are over-confident
+      where success is chance: a placement predicted at 0.98 fails when its try lands where a
+      block already stands, and taking that one failure for a dead end threw away a fully bound
+      stove (kitchen-4 seed 1000: the search left a plan bound to its last placement for
+      another plan, 51 s of motions);
+    - the model foresaw the dead end and the failures confirm it: with ``p_prior`` (the
+      stream's usual rate), a prediction below it is read as a dead end with chance
+      ``D = 1 - p_s / p_prior`` and otherwise as the usual rate (:attr:`StreamCost.dead_end`);
+      the least n after which the query is still feasible with chance below ``doubt``. A
+      placement predicted at 0.03 on a full stove (usual 0.91) is dead after 2 failures, not
+      the 76 the first rule asks (kitchen-4 seed 1003 failed it 50 times at 2f8c9e9)."""
     p = min(max(p_s, P_MIN), P_MAX)
-    return max(DEAD_END_MIN, math.ceil(math.log(doubt) / math.log(1.0 - p)))
+    n = max(DEAD_END_MIN, math.ceil(math.log(doubt) / math.log(1.0 - p)))
+    dead = StreamCost(p_s, 0.0, 0.0, 0.0, p_prior=p_prior).dead_end
+    if dead <= 0.0 or p_prior is None:
+        return n
+    miss = 1.0 - min(max(p_prior, P_MIN), P_MAX)  # a failure, when the query is feasible
+    for k in range(DEAD_END_MIN, n):
+        feasible = (1.0 - dead) * miss**k
+        if feasible / (dead + feasible) < doubt:
+            return k
+    return n
 
 
 class Predictor(Protocol):
@@ -336,7 +354,8 @@ class LearnedPolicy:
                     continue
                 key = terms[0][0]
                 failures = max(len(node.children), pooled.get(key, 0) if key is not None else 0)
-                if failures < dead_after(terms[0][1].p_s):
+                first = terms[0][1]
+                if failures < dead_after(first.p_s, p_prior=first.p_prior):
                     continue
                 reason = self._relevant(node)
                 for c in node.children:

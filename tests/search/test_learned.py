@@ -285,6 +285,18 @@ def test_one_failure_is_never_a_dead_end() -> None:
     assert dead_after(0.2) == 11
 
 
+def test_a_failure_the_model_foresaw_is_a_dead_end_sooner() -> None:
+    """A query predicted far below its stream's usual rate is, to the model, likely a dead end;
+    failures confirm it: a placement predicted at 0.03 on a full stove (usual rate 0.91) is a
+    dead end after 2 failures, not after the 76 that make such a run unlikely under 0.03
+    (kitchen-4 seed 1003 failed it 50 times). At or above the usual rate, nothing changes."""
+    assert dead_after(0.03) == 76
+    assert dead_after(0.03, p_prior=0.907) == 2
+    assert dead_after(0.3, p_prior=0.62) == 3 < dead_after(0.3) == 7
+    assert dead_after(0.5, p_prior=0.62) == dead_after(0.5) == 4
+    assert dead_after(0.98, p_prior=0.9) == dead_after(0.98) == 2
+
+
 class CrowdedOracle(ReachOracle):
     """Like :class:`ReachOracle`, but sampling a pose fails one time in five, in milliseconds
     (as a placement on a crowded stove does), and a reach test takes a second (as a motion
