@@ -346,14 +346,16 @@ def test_the_same_query_failing_under_choices_it_does_not_read_is_a_dead_end() -
 def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> None:
     """A new child is predicted from masked inputs; children that all come out seconds worse
     (here: poses the model expects to execute in no time take 5 to 7 s) raise the cost of
-    querying again, so after a few the search goes on with the best one instead of sampling
-    for ever in the hope of the predicted average (kitchen-4 seed 1027)."""
+    querying again, and of every node with the same query ahead, so after a few the search goes
+    on with the best one instead of sampling for ever in the hope of the predicted average
+    (kitchen-4 seed 1027)."""
     search, policy = make(ListSink())
     policy.config = LearnedConfig(c_explore=0.0)  # values only: no exploration bonus
     tree = search.tree
     node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
+    above = tree[node.parent or 0]  # has the same query ahead of it
     policy.pick_plan(tree)
-    alone = policy.q(tree, node)
+    alone, above_alone = policy.q(tree, node), policy.q(tree, above)
     kids = [
         tree.add(
             node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=s
@@ -366,6 +368,8 @@ def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> N
     policy.pick_plan(tree)
     # the two surprises, 7 s and 6 s, over 2 children plus the half a child the guess weighs
     assert policy.q(tree, node) == pytest.approx(alone + (7.0 + 6.0) / 2.5, abs=0.05)
+    # ... and so does every node with the same query ahead (same inputs, same state)
+    assert policy.q(tree, above) == pytest.approx(above_alone + (7.0 + 6.0) / 2.5, abs=0.05)
     assert policy.expand(tree, node)  # two so far: the model's guess still weighs
     best = tree.add(
         node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=5.0
