@@ -162,7 +162,7 @@ class LearnedPolicy:
     _evidence: dict[str, tuple[int, int]] = field(default_factory=dict)  # ok, failed
     _est: dict[int, float] = field(default_factory=dict)  # lowest Q in each node's subtree
     _fresh: dict[int, float] = field(default_factory=dict)  # predicted Q of a new child
-    _surprise: dict[str, float] = field(default_factory=dict)  # query -> results' surprise
+    _dead: set[int] = field(default_factory=set)  # dead ends, as of the last refresh
     _scale: float = 0.0
 
     # --- Q of a node -------------------------------------------------------------------------
@@ -240,16 +240,14 @@ class LearnedPolicy:
         them, so a sibling with a shorter trajectory is cheaper), plus Eq. 4 over
         the predictions (made once per node), each term updated by the outcomes of the same
         query already made anywhere in the tree (same inputs, same relevant state; see
-        :func:`after_attempts`) and by how much worse than predicted its results came out
-        (:meth:`_surprises`), as counted at the last refresh."""
+        :func:`after_attempts`), as counted at the last refresh, and calibrated by the children
+        the node already has (:meth:`_calibration`)."""
         self._predict(tree, [node])
-        if not self._evidence and not self._surprise:
-            return self._q[node.id]
-        terms = self._terms[node.id]
-        first = terms[0][0] if terms else None
-        shift = self._surprise.get(first, 0.0) if first is not None else 0.0
+        shift = self._calibration(tree, node)
+        if not self._evidence:
+            return self._q[node.id] + shift
         total, feasible = 0.0, 1.0
-        for key, cost in terms:
+        for key, cost in self._terms[node.id]:
             seen = self._evidence.get(key) if key is not None else None
             if seen is None:
                 total += cost.expected
@@ -259,40 +257,26 @@ class LearnedPolicy:
                 total += after_attempts(cost, ok, failed)
         return self._bound[node.id] + with_dead_ends(total, feasible) + shift
 
-    def _surprises(self, tree: Tree, dead: set[int]) -> dict[str, float]:
-        """Per query identity: how much worse (or better) its results came out than the models
-        guessed for a result before seeing one (each result's first Q minus its parent's
-        prediction for a new child), summed over every node that made the query and shrunk
-        towards 0 by :data:`PRIOR_CHILDREN`. Every node that makes the query next adds it.
+    def _calibration(self, tree: Tree, node: Node) -> float:
+        """How much worse (or better) the node's children came out than the models guessed for
+        a child before seeing one, shrunk towards 0 by :data:`PRIOR_CHILDREN`.
 
-        Predicted with its outputs masked, what comes after a query is an average over what
-        they could be; once bound, it is the cost for this binding. The two need not agree: a
-        move whose end is not sampled yet is predicted as the average move (7.2 s for moves
-        that take 12.2 s), and a placement leaves room for the next block until it is made.
-        Without this, querying again looks cheaper than every result the query has given,
-        however many: kitchen-4 seed 1027 re-sampled the third stove placement, and the
-        grasps, IK and motions before it, for 300 s, each time finding no room left for the
-        fourth block, and each time from a new node whose own results said nothing yet.
-
-        Only the nodes that make the query next add it, not those with the query further
-        ahead: the surprise of a masked prediction is mostly systematic (moves are longer than
-        the average move), so it would pile up on the plan being explored and not on the plans
-        not explored yet, whose queries have other identities, and the search went breadth
-        first (a24ce6c: planning 2x longer on seeds 1000-1002)."""
-        out: dict[str, float] = {}
-        for key, makers in self._groups.items():
-            surprise, n = 0.0, 0
-            for m in makers:
-                fresh = self._fresh.get(m)
-                if fresh is None:
-                    continue
-                for c in tree[m].children:
-                    if tree[c].success and c not in dead and c in self._q:
-                        surprise += self._q[c] - fresh
-                        n += 1
-            if n:
-                out[key] = surprise / (n + PRIOR_CHILDREN)
-        return out
+        Predicted with an input masked, a stream's cost is an average over what that input
+        could be; once bound, it is the cost for this binding. The two need not agree: a move
+        whose end is not sampled yet is predicted as the average move (7.2 s for moves that
+        take 12.2 s), and a placement's chance of leaving room for the next block is high
+        until the placement is made. Without this, querying again from a node looks cheaper
+        than every child it has made, however many it makes: kitchen-4 seed 1027 re-sampled
+        the same three blocks' grasps, IK and motions for 300 s in the hope of shorter moves."""
+        fresh = self._fresh.get(node.id)
+        if fresh is None:
+            return 0.0
+        kids = [tree[c] for c in node.children if tree[c].success and c not in self._dead]
+        if not kids:
+            return 0.0
+        self._predict(tree, kids)
+        surprise = sum(self._q[c.id] - fresh for c in kids)
+        return surprise / (len(kids) + PRIOR_CHILDREN)
 
     def _refresh(self, tree: Tree) -> None:
         """Count the outcomes of every query made, then estimate every node: the lowest Q in
@@ -301,7 +285,7 @@ class LearnedPolicy:
         last id does it."""
         self._predict(tree, [n for n in tree.nodes[1:] if n.success])
         dead = self._dead_ends(tree)
-        self._surprise = self._surprises(tree, dead)
+        self._dead = dead
         # Outcomes only, never seconds measured: the same seed makes the same search.
         evidence: dict[str, tuple[int, int]] = {}
         for key, makers in self._groups.items():
