@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import torch
 
-from planner.learning.features import FEATURE_VERSION, Featurizer
+from planner.learning.features import FEATURE_VERSION, FeatureError, Featurizer
 from planner.learning.model import CostModel, ModelError
 from planner.learning.train import TrainReport, auc, format_report, split_runs, train
 from planner.store import QueryRecord
@@ -190,6 +190,10 @@ def test_a_placement_sees_the_room_left_on_its_platform() -> None:
     # Without geometry (a store recorded before it was in the context): unknown.
     row = featurizer.row("sample-placement", ["b4", "stove"], {"facts": [], "values": {}})
     assert row[names.index("room.unknown")] == 1.0
+    # Malformed geometry names what is wrong instead of crashing somewhere deeper.
+    for bad in ({"platforms": [], "blocks": {}}, {**geometry, "blocks": {"b4": "wide"}}):
+        with pytest.raises(FeatureError, match="geometry"):
+            featurizer.row("sample-placement", ["b4", "stove"], {"geometry": bad, "facts": []})
 
 
 def test_scene_features_read_the_facts() -> None:

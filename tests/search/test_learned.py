@@ -289,7 +289,7 @@ def test_a_failure_the_model_foresaw_is_a_dead_end_sooner() -> None:
     """A query predicted far below its stream's usual rate is, to the model, likely a dead end;
     failures confirm it: a placement predicted at 0.03 on a full stove (usual rate 0.91) is a
     dead end after 2 failures, not after the 76 that make such a run unlikely under 0.03
-    (kitchen-4 seed 1003 failed it 50 times). At or above the usual rate, nothing changes."""
+    (kitchen-4 seed 1003 failed 60 placements). At or above the usual rate, nothing changes."""
     assert dead_after(0.03) == 76
     assert dead_after(0.03, p_prior=0.907) == 2
     assert dead_after(0.3, p_prior=0.62) == 3 < dead_after(0.3) == 7
