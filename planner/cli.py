@@ -124,6 +124,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     pl.add_argument("--model", help="model file for --planner learned (default: shipped model)")
     pl.add_argument("--c-explore", type=float, help="learned: UCT exploration weight")
+    pl.add_argument(
+        "--order",
+        choices=("auto", "plan", "model"),
+        default="auto",
+        help="stream order of the tree search: as the actions need them (plan), cheap doubtful "
+        "tests first by the model (model); auto: model for learned, plan otherwise",
+    )
 
     co = sub.add_parser(
         "collect",
@@ -349,6 +356,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         budget_s=args.budget,
         model=args.model,
         c_explore=args.c_explore,
+        order=args.order,
     )
     problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
     progress = _progress_line()
@@ -386,6 +394,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         "execution_s": None if result.execution_s is None else round(result.execution_s, 3),
         "nodes": result.nodes,
         "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
+        "reused": result.reused,
         "plan_file": str(args.out) if args.out and plan_data else None,
         "db": None if args.no_record else str(args.db or default_db_path()),
     }
@@ -400,7 +409,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
         if result.execution_s is not None:
             line += f", execution {result.execution_s:.2f} s"
         print(line)
-        print(f"  tree nodes: {result.nodes}, queries: {len(result.queries)}")
+        print(
+            f"  tree nodes: {result.nodes}, queries: {len(result.queries)}"
+            + (f" (and {result.reused} reused)" if result.reused else "")
+        )
         for s in streams:
             print(f"  {s:20} {counts[(s, True)]:5} ok {counts[(s, False)]:5} failed")
         if summary["plan_file"]:

@@ -176,9 +176,14 @@ class StreamQueried(_EventBase):
     # features): {"facts": [[predicate, arg, ...], ...], "values": {name: value}}, plus the
     # domain's static context (the kitchen: {"geometry": {"platforms": ..., "blocks": ...}}).
     context: dict[str, Any] = field(default_factory=dict)
+    # The node whose identical query (same stream, inputs and context) gave these outputs: no
+    # sampler ran, so the store keeps no training row for it. None for a real query.
+    reused_from: int | None = None
 
     def _validate(self) -> None:
         self._non_negative("node_id", "wall_s", "cpu_s", "execution_s")
+        if self.reused_from is not None and not self.success:
+            self._fail("reused_from", "only a success is reused")
         if not self.stream:
             self._fail("stream", "must not be empty")
         if len(self.inputs) != len(self.input_names):
@@ -443,13 +448,21 @@ def event_from_dict(data: dict[str, Any]) -> Event:
     if cls is None:
         raise ValueError(f"unknown event type {name!r} (known: {', '.join(EVENT_TYPES)})")
     names = _names(cls)
-    missing = [n for n in names if n not in data]
+    # A field with a default may be absent: events stored before it was added still load.
+    missing = [
+        f.name
+        for f in dataclasses.fields(cls)
+        if f.name in names
+        and f.name not in data
+        and f.default is dataclasses.MISSING
+        and f.default_factory is dataclasses.MISSING
+    ]
     if missing:
         raise ValueError(f"event {name!r} is missing field(s): {', '.join(missing)}")
     extra = sorted(set(data) - set(names) - {"type"})
     if extra:
         raise ValueError(f"event {name!r} has unknown field(s): {', '.join(extra)}")
-    return cls(**{n: data[n] for n in names})
+    return cls(**{n: data[n] for n in names if n in data})
 
 
 def event_from_json(text: str | bytes) -> Event:

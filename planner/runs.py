@@ -11,7 +11,7 @@ import logging
 import time
 import uuid
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -34,8 +34,9 @@ from planner.events import (
 from planner.pddl.structs import Atom, Problem
 from planner.search.baseline import BaselineConfig
 from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
-from planner.search.learned import LearnedPolicy, StreamCost
+from planner.search.learned import LearnedPolicy, Predictor, StreamCost, stream_rows
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch
+from planner.search.order import order_streams, seconds_per_failure
 from planner.search.tree import Node
 from planner.streams.runtime import QueryResult
 
@@ -47,6 +48,7 @@ log = logging.getLogger(__name__)
 PLANNERS = ("baseline", "learned", "sequential")  # known planner names
 DEFAULT_PLANNER = "baseline"
 DEFAULT_MODEL = Path(__file__).resolve().parent / "learning" / "models" / "kitchen.pt"
+ORDERS = ("auto", "plan", "model")  # how a tree search orders each stream plan's streams
 
 
 @dataclass(frozen=True)
@@ -60,6 +62,9 @@ class RunConfig:
     restarts: int = 3  # sequential only: restarts of one skeleton before the next
     model: str | None = None  # learned only: model file (default: the shipped kitchen model)
     c_explore: float | None = None  # learned only: UCT exploration weight (default: LearnedConfig)
+    # Stream order of the tree searches: "plan" as the actions need them, "model" cheap
+    # doubtful tests first by the model (planner/search/order.py), "auto" model for learned.
+    order: str = "auto"
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -70,6 +75,17 @@ class RunConfig:
             raise ValueError(f"c_explore must be between 0 and 10, got {self.c_explore}")
         if self.k < 1 or self.attempts < 1 or self.restarts < 1:
             raise ValueError("k, attempts and restarts must be positive")
+        if self.order not in ORDERS:
+            raise ValueError(f"unknown stream order {self.order!r} (known: {', '.join(ORDERS)})")
+        if self.planner == "sequential" and self.order == "model":
+            raise ValueError("order 'model' is for the tree searches (baseline, learned)")
+
+    @property
+    def stream_order(self) -> str:
+        """The order the run uses: "plan" or "model" ("auto" resolved by the planner)."""
+        if self.order != "auto":
+            return self.order
+        return "model" if self.planner == "learned" else "plan"
 
 
 @dataclass(frozen=True)
@@ -84,6 +100,7 @@ class RunResult:
     oracle_s: float | None  # top-k + successful queries on the solution branch
     queries: list[QueryResult] = field(repr=False)
     nodes: int = 0  # tree nodes (baseline) or skeletons tried (sequential)
+    reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
 
     @property
     def solved(self) -> bool:
@@ -167,6 +184,22 @@ def _run(
         progress=say,
     )
     topk_s = abstract.seconds["topk"]
+    plans: tuple[AbstractPlan, ...] = abstract.plans
+    initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
+    initial.update(problem.values)
+    fluents = frozenset(
+        a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
+    )
+    states: list[list[frozenset[Atom]]] = []
+    predictor: Predictor | None = None
+    if config.planner != "sequential":
+        states = [stream_contexts(p, loaded.domain, problem) for p in plans]
+        if config.planner == "learned" or config.stream_order == "model":
+            predictor = _load_predictor(config, loaded)
+        if predictor is not None and config.stream_order == "model":
+            plans, states = _model_order(
+                predictor, plans, states, initial, fluents, loaded.static_context(problem)
+            )
     emitter.emit(
         AbstractPlansFound,
         plans=[
@@ -176,29 +209,23 @@ def _run(
                 "actions": [str(a) for a in p.actions],
                 "streams": [str(s) for s in p.stream_plan],
             }
-            for i, p in enumerate(abstract.plans)
+            for i, p in enumerate(plans)
         ],
         seconds=abstract.seconds["total"],
     )
     runtime = loaded.runtime(problem, seed=config.seed)
     deadline = start + config.budget_s
     if config.planner == "sequential":
-        return _sequential(config, run_id, abstract.plans, loaded, problem, runtime, start, topk_s)
-    initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
-    initial.update(problem.values)
-    states = [stream_contexts(p, loaded.domain, problem) for p in abstract.plans]
-    fluents = frozenset(
-        a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
-    )
+        return _sequential(config, run_id, plans, loaded, problem, runtime, start, topk_s)
     policy: Policy
-    if config.planner == "learned":
+    if predictor is not None and config.planner == "learned":
         policy = _learned_policy(
-            config, loaded, problem, abstract.plans, states, initial, fluents, emitter
+            config, predictor, loaded, problem, plans, states, initial, fluents, emitter
         )
     else:
         policy = BaselinePolicy(BaselineConfig())
     search = TreeSearch(
-        abstract.plans,
+        plans,
         states,
         initial,
         runtime,
@@ -209,14 +236,16 @@ def _run(
         should_stop=should_stop,
         fluents=fluents,
         static_context=loaded.static_context(problem),
+        reuse=True,
     )
     outcome = search.run(deadline=deadline, start=start)
-    queries = [r for _, r in outcome.queries]
+    queries = [r for _, r in outcome.queries if not r.reused]
+    reused = sum(1 for _, r in outcome.queries if r.reused)
     planning_s = time.perf_counter() - start
     bound = None
     execution_s = oracle_s = None
     if outcome.solved and outcome.plan_index is not None:
-        skeleton = abstract.plans[outcome.plan_index]
+        skeleton = plans[outcome.plan_index]
         bound = BoundPlan(skeleton, {**initial, **outcome.values})
         branch = set(search.tree.path(outcome.node_id or 0))
         execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
@@ -232,12 +261,56 @@ def _run(
         oracle_s,
         queries,
         len(search.tree),
+        reused,
     )
     return result, loaded, problem
 
 
+def _load_predictor(config: RunConfig, loaded: LoadedDomain) -> Predictor:
+    from planner.learning.predictor import ModelPredictor
+
+    return ModelPredictor.load(
+        Path(config.model) if config.model else DEFAULT_MODEL, domain=loaded.spec.name
+    )
+
+
+def _model_order(
+    predictor: Predictor,
+    plans: tuple[AbstractPlan, ...],
+    states: list[list[frozenset[Atom]]],
+    initial: dict[str, Any],
+    fluents: frozenset[str],
+    static_context: Mapping[str, Any],
+) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]]]:
+    """Every stream plan reordered by the model's predictions before anything is bound
+    (:mod:`planner.search.order`), in one batch."""
+    spans: list[tuple[int, int]] = []
+    rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
+    for plan, plan_states in zip(plans, states, strict=True):
+        mine = stream_rows(
+            plan,
+            plan_states,
+            initial,
+            encode=jsonable,
+            fluents=fluents,
+            static_context=static_context,
+        )
+        spans.append((len(rows), len(rows) + len(mine)))
+        rows += mine
+    costs = predictor.predict_rows(rows) if rows else []
+    out_plans: list[AbstractPlan] = []
+    out_states: list[list[frozenset[Atom]]] = []
+    for plan, plan_states, (lo, hi) in zip(plans, states, spans, strict=True):
+        scores = [seconds_per_failure(c) for c in costs[lo:hi]]
+        ordered, ordered_states = order_streams(plan, plan_states, fluents, scores)
+        out_plans.append(ordered)
+        out_states.append(ordered_states)
+    return tuple(out_plans), out_states
+
+
 def _learned_policy(
     config: RunConfig,
+    predictor: Predictor,
     loaded: LoadedDomain,
     problem: Problem,
     plans: tuple[AbstractPlan, ...],
@@ -246,12 +319,6 @@ def _learned_policy(
     fluents: frozenset[str],
     emitter: Emitter,
 ) -> Policy:
-    from planner.learning.predictor import ModelPredictor
-
-    predictor = ModelPredictor.load(
-        Path(config.model) if config.model else DEFAULT_MODEL, domain=loaded.spec.name
-    )
-
     def report(node: Node, first: StreamCost, q: float) -> None:
         emitter.emit(
             ModelPrediction,

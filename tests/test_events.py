@@ -176,6 +176,20 @@ def test_missing_and_extra_fields_are_named() -> None:
         event_from_dict(data)
 
 
+def test_events_stored_before_a_field_with_a_default_was_added_still_load() -> None:
+    data = event_to_dict(EXAMPLES["stream_queried"])
+    del data["reused_from"], data["context"]
+    event = event_from_dict(data)
+    assert isinstance(event, StreamQueried)
+    assert event.reused_from is None and event.context == {}
+
+
+def test_only_a_success_can_be_reused() -> None:
+    data = event_to_dict(EXAMPLES["stream_queried"]) | {"success": False, "reused_from": 3}
+    with pytest.raises(ValueError, match="reused_from: only a success is reused"):
+        event_from_dict(data)
+
+
 def test_malformed_json_and_wrong_field_types_are_value_errors() -> None:
     with pytest.raises(ValueError, match="not valid JSON"):
         event_from_json("{'type': ")

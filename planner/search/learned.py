@@ -18,6 +18,7 @@ from typing import Any, Protocol
 
 from planner.abstract.skeleton import AbstractPlan
 from planner.pddl.structs import Atom
+from planner.search.reuse import query_identity, reusable_streams
 from planner.search.tree import ROOT, Node, Tree
 
 P_MIN = 0.02  # P_S is clamped here: a stream never looks hopeless (Eq. 1 divides by it)
@@ -128,6 +129,38 @@ def dead_after(p_s: float, *, p_prior: float | None = None, doubt: float = DEAD_
     return n
 
 
+def stream_rows(
+    plan: AbstractPlan,
+    states: Sequence[frozenset[Atom]],
+    values: Mapping[str, Any],
+    *,
+    encode: Callable[[Any], Any],
+    fluents: frozenset[str],
+    static_context: Mapping[str, Any],
+    start: int = 0,
+) -> list[tuple[str, list[Any | None], dict[str, Any]]]:
+    """The model rows of ``plan``'s streams from ``start`` on: stream, encoded inputs (None
+    while unbound) and the context (fluent facts, their bound values, the scene's static
+    facts), as the models were trained on them."""
+    rows = []
+    for i in range(start, len(plan.stream_plan)):
+        inst = plan.stream_plan[i]
+        inputs = [encode(values[n]) if n in values else None for n in inst.inputs]
+        facts = sorted(a for a in states[i] if a.predicate in fluents)
+        names = {x for a in facts for x in a.args}
+        context = {
+            **static_context,
+            "facts": [[a.predicate, *a.args] for a in facts],
+            "values": {
+                n: encode(values[n])
+                for n in sorted(names)
+                if n in values and not isinstance(values[n], str)
+            },
+        }
+        rows.append((inst.stream, inputs, context))
+    return rows
+
+
 class Predictor(Protocol):
     """Batched predictions: one (stream, encoded inputs or None, context) per row."""
 
@@ -164,30 +197,28 @@ class LearnedPolicy:
     _fresh: dict[int, float] = field(default_factory=dict)  # predicted Q of a new child
     _dead: set[int] = field(default_factory=set)  # dead ends, as of the last refresh
     _scale: float = 0.0
+    # Results the search will reuse (planner/search/reuse.py): per node, the identity of each
+    # stream ahead where it can be known (None otherwise); identity -> execution seconds of
+    # its first success; nodes scanned for successes so far.
+    _idents: dict[int, list[str | None]] = field(default_factory=dict)
+    _known: dict[str, float] = field(default_factory=dict)
+    _scanned: int = 0
+    _reusable: list[list[bool]] = field(default_factory=list)
 
     # --- Q of a node -------------------------------------------------------------------------
 
     def _rows(
         self, plan_index: int, depth: int, values: Mapping[str, Any]
     ) -> list[tuple[str, list[Any | None], dict[str, Any]]]:
-        plan = self.skeletons[plan_index]
-        rows = []
-        for i in range(depth, len(plan.stream_plan)):
-            inst = plan.stream_plan[i]
-            inputs = [self.encode(values[n]) if n in values else None for n in inst.inputs]
-            facts = sorted(a for a in self.states[plan_index][i] if a.predicate in self.fluents)
-            names = {x for a in facts for x in a.args}
-            context = {
-                **self.static_context,
-                "facts": [[a.predicate, *a.args] for a in facts],
-                "values": {
-                    n: self.encode(values[n])
-                    for n in sorted(names)
-                    if n in values and not isinstance(values[n], str)
-                },
-            }
-            rows.append((inst.stream, inputs, context))
-        return rows
+        return stream_rows(
+            self.skeletons[plan_index],
+            self.states[plan_index],
+            values,
+            encode=self.encode,
+            fluents=self.fluents,
+            static_context=self.static_context,
+            start=depth,
+        )
 
     def _key(self, row: tuple[str, list[Any | None], dict[str, Any]]) -> str | None:
         """A query's identity: stream, inputs and the state that matters; None while an input
@@ -213,26 +244,68 @@ class LearnedPolicy:
             spans.append((node, len(rows), len(rows) + len(mine)))
             rows += mine
         costs = self.predictor.predict_rows(rows) if rows else []
+        if not self._reusable:
+            self._reusable = [
+                reusable_streams(p, st, self.fluents)
+                for p, st in zip(self.skeletons, self.states, strict=True)
+            ]
         for node, lo, hi in spans:
             ours = costs[lo:hi]
             keys = [self._key(row) for row in rows[lo:hi]]
             self._terms[node.id] = list(zip(keys, ours, strict=True))
+            reusable = self._reusable[node.plan_index][node.depth :]
+            self._idents[node.id] = [
+                query_identity(*row) if ok and all(v is not None for v in row[1]) else None
+                for row, ok in zip(rows[lo:hi], reusable, strict=True)
+            ]
             if keys and keys[0] is not None:  # the node's children are attempts of this query
                 self._groups.setdefault(keys[0], []).append(node.id)
-            feasible = math.prod(1.0 - c.dead_end for c in ours)
             self._bound[node.id] = sum(tree[i].execution_s for i in tree.path(node.id))
-            self._q[node.id] = self._bound[node.id] + with_dead_ends(remaining_cost(ours), feasible)
-            if ours:  # a child binds the next stream: its execution and the rest remain
-                rest = ours[1:]
-                self._fresh[node.id] = (
-                    self._bound[node.id]
-                    + ours[0].r_m
-                    + with_dead_ends(
-                        remaining_cost(rest), math.prod(1.0 - c.dead_end for c in rest)
-                    )
-                )
+            self._settle(node)
             if ours and self.on_prediction is not None:
                 self.on_prediction(node, ours[0], self._q[node.id])
+
+    def _settle(self, node: Node) -> None:
+        """Eq. 4 for the node and for a new child of it, with the results the search will
+        reuse counted at their execution seconds only."""
+        terms = self._terms[node.id]
+        idents = self._idents[node.id]
+        total, feasible = self._remaining(terms, idents, first=not node.children, evidence=False)
+        self._q[node.id] = self._bound[node.id] + with_dead_ends(total, feasible)
+        if terms:  # a child binds the next stream: its execution and the rest remain
+            rest, _ = self._remaining(terms[1:], idents[1:], first=True, evidence=False)
+            rest_feasible = math.prod(1.0 - c.dead_end for _, c in terms[1:])
+            self._fresh[node.id] = (
+                self._bound[node.id] + terms[0][1].r_m + with_dead_ends(rest, rest_feasible)
+            )
+
+    def _remaining(
+        self,
+        terms: Sequence[tuple[str | None, StreamCost]],
+        idents: Sequence[str | None],
+        *,
+        first: bool,
+        evidence: bool,
+    ) -> tuple[float, float]:
+        """Eq. 4 over ``terms`` (and the chance that none is a dead end). A term the search
+        will answer with an earlier result costs that result's execution seconds (the first
+        term only when ``first``: a node that has queried already asks its sampler for a new
+        sample). With ``evidence``, a term whose query was made elsewhere is updated by its
+        outcomes (:func:`after_attempts`)."""
+        total, feasible = 0.0, 1.0
+        for j, ((key, cost), ident) in enumerate(zip(terms, idents, strict=True)):
+            known = self._known.get(ident) if ident is not None and (first or j) else None
+            if known is not None:
+                total += known
+                continue
+            seen = self._evidence.get(key) if evidence and key is not None else None
+            if seen is None:
+                total += cost.expected
+                feasible *= 1.0 - cost.dead_end
+            else:  # a success proves it feasible; failures only: after_attempts weighs them
+                ok, failed = seen
+                total += after_attempts(cost, ok, failed)
+        return total, feasible
 
     def q(self, tree: Tree, node: Node) -> float:
         """Expected seconds still to spend on ``node``'s plan: executing the trajectories
@@ -246,15 +319,9 @@ class LearnedPolicy:
         shift = self._calibration(tree, node)
         if not self._evidence:
             return self._q[node.id] + shift
-        total, feasible = 0.0, 1.0
-        for key, cost in self._terms[node.id]:
-            seen = self._evidence.get(key) if key is not None else None
-            if seen is None:
-                total += cost.expected
-                feasible *= 1.0 - cost.dead_end
-            else:  # a success proves it feasible; failures only: after_attempts weighs them
-                ok, failed = seen
-                total += after_attempts(cost, ok, failed)
+        total, feasible = self._remaining(
+            self._terms[node.id], self._idents[node.id], first=not node.children, evidence=True
+        )
         return self._bound[node.id] + with_dead_ends(total, feasible) + shift
 
     def _calibration(self, tree: Tree, node: Node) -> float:
@@ -284,6 +351,7 @@ class LearnedPolicy:
         another branch is cheaper). Children come after their parents, so one pass from the
         last id does it."""
         self._predict(tree, [n for n in tree.nodes[1:] if n.success])
+        self._learn_results(tree)
         dead = self._dead_ends(tree)
         self._dead = dead
         # Outcomes only, never seconds measured: the same seed makes the same search.
@@ -313,6 +381,25 @@ class LearnedPolicy:
             est[node.id] = best
         self._est = est
 
+    def _learn_results(self, tree: Tree) -> None:
+        """Note the first success of each reusable query made since the last refresh, and
+        settle again the nodes whose streams ahead include it."""
+        fresh: set[str] = set()
+        for node in tree.nodes[max(self._scanned, 1) :]:
+            if not node.success or node.parent is None:
+                continue
+            idents = self._idents.get(node.parent)
+            ident = idents[0] if idents else None
+            if ident is not None and ident not in self._known:
+                self._known[ident] = node.execution_s
+                fresh.add(ident)
+        self._scanned = len(tree.nodes)
+        if not fresh:
+            return
+        for node_id, idents in self._idents.items():
+            if any(i in fresh for i in idents if i is not None):
+                self._settle(tree[node_id])
+
     def _relevant(self, node: Node) -> set[str]:
         """Objects the outcome of ``node``'s next query depends on: its inputs and the objects of
         the state facts that make up its identity (see :meth:`_key`)."""
@@ -328,21 +415,27 @@ class LearnedPolicy:
         """Nodes whose every continuation is taken to fail. A node is a dead end when its next
         query has failed, or led only to dead ends, more often in a row than its prediction
         explains (:func:`dead_after`), counting the same query made from other nodes (same
-        inputs, same relevant state: :meth:`_key`) as long as none of them succeeded. Its reason
-        is the objects those failures depend on; if the node's own outputs are not among them,
-        re-sampling them cannot help, so its parent is a dead end too, and so on up to the node
-        that bound something the failures depend on (backjumping). A dead end counts as a failed
-        attempt of its parent's query: a placement that always succeeds but leaves no room for
-        what comes next stops looking cheap to re-sample (seed 1012: one block in the middle of
-        the stove; the search re-placed the next block 84 times without ever going back to it).
+        inputs, same relevant state: :meth:`_key`) unless one of them got past the failures.
+        Its reason is the objects those failures depend on; if the node's own outputs are not
+        among them, re-sampling them cannot help, so its parent is a dead end too, and so on
+        up to the node that bound something the failures depend on (backjumping). A dead end
+        counts as a failed attempt of its parent's query: a placement that always succeeds but
+        leaves no room for what comes next stops looking cheap to re-sample (seed 1012: one
+        block in the middle of the stove; the search re-placed the next block 84 times without
+        ever going back to it).
 
         Pooling matters when the query that fails comes after choices it does not read
         (kitchen-4 seed 1000: the last block's stove placement failed once under each of 13
         new grasps, IK solutions and motions of that block, and the crowded stove was never
-        blamed)."""
+        blamed). A fresh attempt elsewhere that has not yet reached the failing depth does not
+        stop the pooling (seed 1025, cheap streams first: every re-sampled grasp of the third
+        block made a new node placing it on the stove, whose one unexplored child kept the
+        crowded stove from ever being blamed; 521 failed placements in 300 s)."""
+        deepest = self._deepest(tree)
         dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
+        origin: dict[int, int] = {}  # dead node -> depth of the failures behind it
         for _ in range(8):  # new dead ends fail their parents' queries: pool again
-            pooled = self._pooled_failures(tree, dead)
+            pooled = self._pooled_failures(tree, dead, origin, deepest)
             before = len(dead)
             for node in reversed(tree.nodes[1:]):
                 if node.id in dead or not node.success or node.depth == 0:
@@ -358,29 +451,56 @@ class LearnedPolicy:
                 if failures < dead_after(first.p_s, p_prior=first.p_prior):
                     continue
                 reason = self._relevant(node)
+                depth = min(origin.get(c, tree[c].depth) for c in node.children)
                 for c in node.children:
                     if c in dead:
                         reason |= dead[c] - set(tree[c].outputs)
                 current = node
                 dead[current.id] = reason
+                origin[current.id] = depth
                 while not (set(current.outputs) & reason) and current.parent is not None:
                     parent = tree[current.parent]
                     if parent.depth == 0 or parent.id == ROOT:
                         break
                     dead[parent.id] = reason
+                    origin[parent.id] = depth
                     current = parent
             if len(dead) == before:
                 break
         return set(dead)
 
-    def _pooled_failures(self, tree: Tree, dead: Mapping[int, set[str]]) -> dict[str, int]:
-        """Per query identity that never succeeded (dead ends aside): how often it has failed,
-        or led only to a dead end, over every node that made it."""
+    @staticmethod
+    def _deepest(tree: Tree) -> dict[int, int]:
+        """Per node, the depth of the deepest success in its subtree (itself included)."""
+        deepest: dict[int, int] = {}
+        for node in reversed(tree.nodes[1:]):
+            mine = node.depth if node.success else -1
+            deepest[node.id] = max(mine, deepest.get(node.id, -1))
+            if node.parent is not None:
+                deepest[node.parent] = max(deepest.get(node.parent, -1), deepest[node.id])
+        return deepest
+
+    def _pooled_failures(
+        self,
+        tree: Tree,
+        dead: Mapping[int, set[str]],
+        origin: Mapping[int, int],
+        deepest: Mapping[int, int],
+    ) -> dict[str, int]:
+        """Per query identity: how often it has failed, or led only to a dead end, over every
+        node that made it; left out while an attempt that is not a dead end got past the
+        depth where those failures happened."""
         out: dict[str, int] = {}
         for key, makers in self._groups.items():
             children = [c for n in makers for c in tree[n].children]
-            if not any(tree[c].success and c not in dead for c in children):
-                out[key] = len(children)
+            bad = [c for c in children if not tree[c].success or c in dead]
+            if not bad:
+                continue
+            depth = min(origin.get(c, tree[c].depth) for c in bad)
+            if not any(
+                tree[c].success and c not in dead and deepest.get(c, -1) >= depth for c in children
+            ):
+                out[key] = len(bad)
         return out
 
     def _estimate(self, tree: Tree, node: Node) -> float:

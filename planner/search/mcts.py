@@ -22,6 +22,7 @@ from planner.search.baseline import (
     success_value,
     ucb,
 )
+from planner.search.reuse import query_identity, reusable_streams
 from planner.search.tree import ROOT, Node, Tree
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
@@ -131,6 +132,7 @@ class TreeSearch:
         should_stop: Callable[[], bool] | None = None,
         fluents: frozenset[str] = frozenset(),
         static_context: Mapping[str, Any] | None = None,
+        reuse: bool = False,
     ) -> None:
         if not skeletons:
             raise ValueError("the search needs at least one stream plan")
@@ -147,6 +149,13 @@ class TreeSearch:
         self.should_stop = should_stop
         self.fluents = fluents  # predicates recorded as the context of each query
         self.static_context = dict(static_context or {})  # recorded with every query too
+        # Reuse the outputs of an identical successful query (same stream, inputs and fluent
+        # context) for a node's first attempt, where nothing else reads those outputs: a
+        # motion re-made after an unrelated choice changed costs nothing (see _reusable).
+        self.reuse = reuse
+        self._reusable = [self._leaves(i) for i in range(len(self.skeletons))] if reuse else []
+        # identity -> (node, outputs, wall seconds) of its first success
+        self._results: dict[str, tuple[int, tuple[Any, ...], float]] = {}
         self.tree = Tree()
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
@@ -187,6 +196,13 @@ class TreeSearch:
         self._added(node)
         return node
 
+    def _leaves(self, plan_index: int) -> list[bool]:
+        return reusable_streams(self.skeletons[plan_index], self.states[plan_index], self.fluents)
+
+    def _identity(self, stream: str, inputs: tuple[Any, ...], context: StreamContext) -> str:
+        encoded = [self.encode(v) for v in inputs]
+        return query_identity(stream, encoded, self._context_json(context))
+
     def _query(self, node: Node) -> Node:
         """Query the next stream of ``node``'s plan once; the result becomes a child."""
         plan = self.skeletons[node.plan_index]
@@ -194,9 +210,19 @@ class TreeSearch:
         values = {**self.initial_values, **self.tree.bindings(node.id)}
         inputs = tuple(values[name] for name in inst.inputs)
         context = StreamContext(self.states[node.plan_index][node.depth], values)
-        result = self.runtime.query(
-            inst.stream, inputs, key=(node.id, inst.stream), context=context
-        )
+        identity = None
+        if self.reuse and self._reusable[node.plan_index][node.depth]:
+            identity = self._identity(inst.stream, inputs, context)
+        earlier = self._results.get(identity) if identity and not node.children else None
+        reused_from: int | None = None
+        wall_s = 0.0  # what the node's binding cost, for the oracle: the original's seconds
+        if earlier is not None:
+            reused_from, outputs_, wall_s = earlier
+            result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True)
+        else:
+            result = self.runtime.query(
+                inst.stream, inputs, key=(node.id, inst.stream), context=context
+            )
         outputs = (
             dict(zip(inst.outputs, result.outputs, strict=True))
             if result.outputs is not None
@@ -208,10 +234,12 @@ class TreeSearch:
             depth=node.depth + 1,
             success=result.success,
             outputs=outputs,
-            query_wall_s=result.wall_s,
+            query_wall_s=wall_s if result.reused else result.wall_s,
             execution_s=result.execution_s if result.success else 0.0,
         )
         self.queries.append((child.id, result))
+        if identity is not None and result.outputs is not None and reused_from is None:
+            self._results.setdefault(identity, (child.id, tuple(result.outputs), result.wall_s))
         if result.success:
             self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))
         if self.emitter is not None:
@@ -227,6 +255,7 @@ class TreeSearch:
                 execution_s=result.execution_s,
                 error=result.error,
                 context=self._context_json(context),
+                reused_from=reused_from,
             )
         self._added(child)
         return child

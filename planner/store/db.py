@@ -633,7 +633,7 @@ class RunStore:
                     "payload": _dumps(payload),
                 }
             )
-            if isinstance(e, StreamQueried):
+            if isinstance(e, StreamQueried) and e.reused_from is None:
                 query_rows.append(
                     {
                         "run_id": run_id,

@@ -40,6 +40,7 @@ class QueryResult:
     wall_s: float
     cpu_s: float
     error: str | None = None  # set when the sampler raised or returned a malformed result
+    reused: bool = False  # the outputs of an identical earlier query; no sampler ran
 
     @property
     def execution_s(self) -> float:

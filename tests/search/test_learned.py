@@ -374,3 +374,36 @@ def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> N
     policy.pick_plan(tree)
     assert not policy.expand(tree, node)  # 5 s is as good as a new one is likely to be
     assert policy.pick_child(tree, node).id == best.id
+
+
+def test_an_attempt_that_has_not_reached_the_failures_does_not_stop_the_pooling() -> None:
+    """Three nodes make the same query (a's pose, after the same test). Two of its results led
+    to dead ends (b's pose finds no room, twice each); the third has not been tried further
+    yet. That fresh attempt proves nothing, so the failures still pool and the makers of the
+    doomed results are dead ends (kitchen-4 seed 1025: every re-sampled grasp made a new maker
+    of the third block's stove placement, and its unexplored child kept the crowded stove from
+    being blamed for 521 placements)."""
+    search, policy = make(ListSink())
+    policy.predictor = CrowdedOracle()
+    tree = search.tree
+    plan = search.skeletons[0]
+    a_pose = plan.stream_plan[1].outputs[0]
+    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    makers = [tree.add(top.id, plan_index=0, depth=1, success=True) for _ in range(3)]
+    placed = [
+        tree.add(m.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0}) for m in makers
+    ]
+    nodes = [top, *makers, *placed]
+    for i in (0, 2):  # these two bindings of a's pose leave b no room
+        reached = tree.add(placed[i].id, plan_index=0, depth=3, success=True)
+        tested = tree.add(reached.id, plan_index=0, depth=4, success=True)
+        nodes += [reached, tested]
+        for _ in range(2):
+            tree.add(tested.id, plan_index=0, depth=5, success=False)
+    for node in nodes:
+        node.visits = 3
+    policy.pick_plan(tree)
+    dead = policy._dead
+    assert placed[0].id in dead and placed[2].id in dead and placed[1].id not in dead
+    assert makers[0].id in dead and makers[2].id in dead  # one dead child each, pooled to two
+    assert makers[1].id not in dead  # its own attempt is still open

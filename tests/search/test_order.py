@@ -1,0 +1,143 @@
+"""The stream order of a tree search: cheap doubtful tests first, never before what they read."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from planner.abstract import AbstractConfig, plan_abstract
+from planner.abstract.skeleton import AbstractPlan
+from planner.domains import problem_for_scene
+from planner.pddl.structs import Atom
+from planner.runs import DEFAULT_MODEL, RunConfig, _model_order
+from planner.search.binding import stream_contexts
+from planner.search.learned import StreamCost
+from planner.search.order import dependencies, order_streams, seconds_per_failure
+
+
+def _fluents() -> frozenset[str]:
+    loaded, _ = problem_for_scene("kitchen-1", seed=0)
+    return frozenset(
+        a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
+    )
+
+
+FLUENTS = _fluents()
+
+
+def kitchen(
+    scene: str = "kitchen-2", k: int = 3
+) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]], dict[str, object], object]:
+    loaded, problem = problem_for_scene(scene, seed=0)
+    plans = plan_abstract(
+        loaded.domain,
+        loaded.streams,
+        problem,
+        AbstractConfig(k=k, diversity_ignore=loaded.spec.diversity_ignore),
+    ).plans
+    states = [stream_contexts(p, loaded.domain, problem) for p in plans]
+    initial: dict[str, object] = {o.name: o.name for o in problem.objects}
+    initial.update(problem.values)
+    return plans, states, initial, (loaded, problem)
+
+
+def check_binding_order(plan: AbstractPlan, states: list[frozenset[Atom]]) -> None:
+    """Every stream's inputs and context objects are made before it."""
+    made: set[str] = set()
+    produced = set(plan.optimistic_objects)
+    for inst, state in zip(plan.stream_plan, states, strict=True):
+        read = set(inst.inputs) | {x for a in state if a.predicate in FLUENTS for x in a.args}
+        missing = (read & produced) - made
+        assert not missing, f"{inst} reads {missing} before they are bound"
+        made.update(inst.outputs)
+
+
+def test_motions_go_last_and_nothing_is_read_before_it_is_bound() -> None:
+    plans, states, _, _ = kitchen()
+    plan = plans[0]
+    scores = [100.0 if s.stream == "plan-motion" else 0.01 for s in plan.stream_plan]
+    ordered, ordered_states = order_streams(plan, states[0], FLUENTS, scores)
+    kinds = [s.stream for s in ordered.stream_plan]
+    first_motion = kinds.index("plan-motion")
+    assert set(kinds[first_motion:]) == {"plan-motion"}  # no cheap test after a motion
+    assert kinds[:first_motion] != [s.stream for s in plan.stream_plan][:first_motion]
+    # The same streams, each with its own context and first use, in an order that binds.
+    assert sorted(map(str, ordered.stream_plan)) == sorted(map(str, plan.stream_plan))
+    pairs = dict(
+        zip(map(str, plan.stream_plan), zip(states[0], plan.first_use, strict=True), strict=True)
+    )
+    for inst, state, use in zip(
+        ordered.stream_plan, ordered_states, ordered.first_use, strict=True
+    ):
+        assert pairs[str(inst)] == (state, use)
+    assert ordered.actions == plan.actions
+    check_binding_order(ordered, ordered_states)
+
+
+def test_a_placement_waits_for_the_blocks_it_sees_even_when_it_scores_lowest() -> None:
+    plans, states, _, _ = kitchen()
+    plan, plan_states = plans[0], states[0]
+    deps = dependencies(plan, plan_states, FLUENTS)
+    # A placement whose context holds another block's placed pose depends on that placement.
+    seen = [
+        (i, j)
+        for i, inst in enumerate(plan.stream_plan)
+        for j in deps[i]
+        if inst.stream == "sample-placement" and plan.stream_plan[j].stream == "sample-placement"
+    ]
+    assert seen, "kitchen-2 puts both blocks on the sink and the stove"
+    i, j = seen[0]
+    scores = [1.0] * len(plan.stream_plan)
+    scores[i] = -1.0  # the most wanted stream of all still waits for what it reads
+    ordered, _ = order_streams(plan, plan_states, FLUENTS, scores)
+    position = {str(s): n for n, s in enumerate(ordered.stream_plan)}
+    assert position[str(plan.stream_plan[j])] < position[str(plan.stream_plan[i])]
+
+
+def test_cheap_and_doubtful_before_dear_and_sure() -> None:
+    placement = StreamCost(p_s=0.5, r_s=0.0002, r_f=0.0005, r_m=0.0)
+    ik = StreamCost(p_s=0.6, r_s=0.02, r_f=0.02, r_m=0.0)
+    motion = StreamCost(p_s=0.99, r_s=2.5, r_f=2.0, r_m=9.0)
+    certain = StreamCost(p_s=1.0, r_s=3.0, r_f=0.0, r_m=0.0)
+    ratios = [seconds_per_failure(c) for c in (placement, ik, motion, certain)]
+    assert ratios == sorted(ratios)
+    assert seconds_per_failure(certain) < float("inf")
+
+
+def test_the_shipped_model_orders_kitchen_4_tests_before_motions() -> None:
+    from planner.learning.predictor import ModelPredictor
+
+    plans, states, initial, (loaded, problem) = kitchen("kitchen-4", k=2)
+    predictor = ModelPredictor.load(DEFAULT_MODEL, domain="kitchen")
+    ordered, ordered_states = _model_order(
+        predictor, plans, states, initial, FLUENTS, loaded.static_context(problem)
+    )
+    for plan, plan_states in zip(ordered, ordered_states, strict=True):
+        kinds = [s.stream for s in plan.stream_plan]
+        first_motion = kinds.index("plan-motion")
+        assert set(kinds[first_motion:]) == {"plan-motion"}
+        check_binding_order(plan, plan_states)
+
+
+def test_contexts_out_of_binding_order_are_refused() -> None:
+    plans, states, _, _ = kitchen()
+    plan = plans[0]
+    # Swap the plan's streams but not their contexts: a stream would read a later output.
+    swapped = replace(
+        plan,
+        stream_plan=tuple(reversed(plan.stream_plan)),
+        first_use=tuple(reversed(plan.first_use)),
+    )
+    with pytest.raises(ValueError, match="made by a later stream"):
+        dependencies(swapped, list(reversed(states[0])), FLUENTS)
+
+
+def test_an_unknown_order_or_a_model_order_for_sequential_is_refused() -> None:
+    with pytest.raises(ValueError, match="unknown stream order 'fastest'"):
+        RunConfig(scene="kitchen-1", order="fastest")
+    with pytest.raises(ValueError, match="tree searches"):
+        RunConfig(scene="kitchen-1", planner="sequential", order="model")
+    assert RunConfig(scene="kitchen-1", planner="learned").stream_order == "model"
+    assert RunConfig(scene="kitchen-1").stream_order == "plan"
+    assert RunConfig(scene="kitchen-1", order="model").stream_order == "model"
