@@ -20,7 +20,7 @@ from typing import Any
 from planner import __version__
 from planner.domains import problem_for_scene
 from planner.experiment import Trial, TrialResult, run_trials
-from planner.runs import DEFAULT_MODEL, PLANNERS, RunConfig
+from planner.runs import DEFAULT_MODEL, ORDERS, PLANNERS, RunConfig
 from planner.store import BenchTrialRecord, RunStore
 
 log = logging.getLogger(__name__)
@@ -40,6 +40,7 @@ class BenchConfig:
     seeds: tuple[int, ...]
     budget_s: float
     model: str | None = None  # model file of the learned planner (default: the shipped one)
+    order: str = "auto"  # stream order of every planner (RunConfig.order)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -48,6 +49,7 @@ class BenchConfig:
             "seeds": list(self.seeds),
             "budget_s": self.budget_s,
             "model": self.model,
+            "order": self.order,
         }
 
     @classmethod
@@ -58,7 +60,12 @@ class BenchConfig:
             seeds=tuple(int(s) for s in data["seeds"]),
             budget_s=float(data["budget_s"]),
             model=data.get("model"),
+            order=str(data.get("order", "auto")),  # benchmarks before --order: auto
         )
+
+    def uses_model(self, planner: str) -> bool:
+        """Does ``planner`` load the model in this benchmark (to search, or to order)?"""
+        return planner == "learned" or (self.order == "model" and planner != "sequential")
 
 
 def make_config(
@@ -69,6 +76,7 @@ def make_config(
     seed_start: int,
     budget_s: float,
     model: str | None = None,
+    order: str = "auto",
 ) -> BenchConfig:
     """A checked configuration; :class:`BenchError` names what is wrong."""
     names = tuple(p.strip() for p in planners if p.strip())
@@ -86,12 +94,17 @@ def make_config(
         raise BenchError(f"--seed-start must be >= 0, got {seed_start}")
     if not 0 < budget_s <= MAX_BUDGET_S:
         raise BenchError(f"--budget must be in (0, {MAX_BUDGET_S:.0f}] seconds, got {budget_s}")
-    if model is not None and "learned" not in names:
-        raise BenchError("--model is only used by the learned planner, which is not listed")
-    if "learned" in names and model is None:
+    if order not in ORDERS:
+        raise BenchError(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
+    needs_model = "learned" in names or order == "model"
+    if model is not None and not needs_model:
+        raise BenchError(
+            "--model is only used by the learned planner or --order model, neither is asked"
+        )
+    if needs_model and model is None:
         model = str(DEFAULT_MODEL)
     return BenchConfig(
-        scene, names, tuple(range(seed_start, seed_start + trials)), float(budget_s), model
+        scene, names, tuple(range(seed_start, seed_start + trials)), float(budget_s), model, order
     )
 
 
@@ -100,9 +113,14 @@ def check(config: BenchConfig) -> dict[str, Any]:
     model (its file and the seeds that trained it)."""
     loaded, _ = problem_for_scene(config.scene)  # SceneError for an unknown scene
     for planner in config.planners:
-        RunConfig(scene=config.scene, planner=planner, budget_s=config.budget_s)
+        try:
+            RunConfig(
+                scene=config.scene, planner=planner, budget_s=config.budget_s, order=config.order
+            )
+        except ValueError as exc:
+            raise BenchError(f"{planner}: {exc}") from None
     info: dict[str, Any] = {"model": None, "training_seeds": None}
-    if "learned" not in config.planners:
+    if not any(config.uses_model(p) for p in config.planners):
         return info
     from planner.learning.model import CostModel
 
@@ -178,8 +196,8 @@ def trial_order(config: BenchConfig) -> list[Trial]:
     for i, seed in enumerate(config.seeds):
         planners = config.planners if i % 2 == 0 else tuple(reversed(config.planners))
         for planner in planners:
-            model = config.model if planner == "learned" else None
-            out.append(Trial(config.scene, seed, planner, config.budget_s, model))
+            model = config.model if config.uses_model(planner) else None
+            out.append(Trial(config.scene, seed, planner, config.budget_s, model, config.order))
     return out
 
 

@@ -159,6 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
     be.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
     be.add_argument("--model", help="model file for the learned planner (default: shipped)")
+    be.add_argument(
+        "--order",
+        choices=("auto", "plan", "model"),
+        default="auto",
+        help="stream order of every planner (see tamp plan --order; default auto)",
+    )
     be.add_argument("--db", type=Path, help="run store (default: user data)")
     be.add_argument("--ray-address", help="run the trials as Ray tasks: ADDRESS, auto, or local")
     be.add_argument("--resume", metavar="BENCH_ID", help="run the missing trials of a benchmark")
@@ -465,6 +471,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
             seed_start=args.seed_start,
             budget_s=args.budget,
             model=args.model,
+            order=args.order,
         )
     bench_id, results = run_bench(
         db,

@@ -32,7 +32,8 @@ class Trial:
     seed: int
     planner: str
     budget_s: float
-    model: str | None = None  # model file, for learned planners
+    model: str | None = None  # model file, for learned planners (and --order model)
+    order: str = "auto"  # stream order (RunConfig.order)
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,7 @@ def run_trial(trial: Trial, db: str) -> TrialResult:
         planner=trial.planner,
         budget_s=trial.budget_s,
         model=trial.model,
+        order=trial.order,
     )
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config))
     try:

@@ -297,7 +297,8 @@ def render_html(summary: dict[str, Any]) -> str:
     head = (
         f"<h1>Benchmark {html.escape(summary['bench_id'])}</h1>"
         f"<p>{html.escape(config['scene'])}, planners {html.escape(', '.join(planners))}, "
-        f"{len(seeds)} seeds ({min(seeds)}-{max(seeds)}), budget {budget:.0f} s per trial; "
+        f"{len(seeds)} seeds ({min(seeds)}-{max(seeds)}), budget {budget:.0f} s per trial, "
+        f"stream order {html.escape(str(config.get('order', 'auto')))}; "
         f"status {html.escape(summary['status'])}; started {summary['created_at']}"
         + (f", wall time {summary['wall_s'] / 60:.1f} min" if summary["wall_s"] else "")
         + "</p>"

@@ -38,6 +38,7 @@ LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-
         ({"budget_s": 1e6}, "--budget"),
         ({"seed_start": -1}, "--seed-start"),
         ({"model": "m.pt"}, "only used by the learned planner"),
+        ({"order": "fastest"}, "--order must be one of auto, plan, model"),
     ],
 )
 def test_bad_settings_fail_before_any_trial(kwargs: dict[str, object], says: str) -> None:
@@ -90,6 +91,29 @@ def test_a_resumed_benchmark_finds_its_model_by_content(tmp_path: Path) -> None:
     with pytest.raises(BenchError, match=r"kitchen.pt has changed .* start a new benchmark"):
         locate_model(config, "0" * 64)
     assert locate_model(config, None) == config  # recorded before models were hashed
+
+
+def test_a_model_order_gives_every_tree_search_the_model_and_is_kept_for_resume() -> None:
+    config = make_config(
+        "kitchen-4", ["baseline", "learned"], trials=2, seed_start=1000, budget_s=10, order="model"
+    )
+    trials = trial_order(config)
+    assert {(t.planner, t.order, t.model) for t in trials} == {
+        ("baseline", "model", str(DEFAULT_MODEL)),
+        ("learned", "model", str(DEFAULT_MODEL)),
+    }
+    assert BenchConfig.from_dict(config.to_dict()) == config
+    old = config.to_dict()
+    del old["order"]  # a benchmark recorded before --order existed
+    assert BenchConfig.from_dict(old).order == "auto"
+    assert check(config)["model"] == str(DEFAULT_MODEL)
+    plan_order = make_config("kitchen-4", ["baseline"], trials=1, seed_start=1000, budget_s=10)
+    assert plan_order.model is None and trial_order(plan_order)[0].model is None
+    sequential = make_config(
+        "line-2", ["sequential"], trials=1, seed_start=0, budget_s=10, order="model"
+    )
+    with pytest.raises(BenchError, match="sequential: order 'model' is for the tree searches"):
+        check(sequential)
 
 
 def test_trials_are_paired_and_interleaved() -> None:
