@@ -537,7 +537,10 @@ function describe(ev) {
     case "stream_queried":
       return (
         `${t}query ${ev.stream}(${ev.input_names.join(" ")}) ${ev.success ? "ok" : "FAILED"} ` +
-        `in ${seconds(ev.wall_s)} → node ${ev.node_id}${ev.error ? `: ${ev.error}` : ""}`
+        (ev.reused_from !== null && ev.reused_from !== undefined
+          ? `reused from node ${ev.reused_from}`
+          : `in ${seconds(ev.wall_s)}`) +
+        ` → node ${ev.node_id}${ev.error ? `: ${ev.error}` : ""}`
       );
     case "model_prediction":
       return `${t}prediction for node ${ev.node_id}: Q ${num(ev.q)} s, P_S ${num(ev.p_s)}`;
@@ -675,6 +678,9 @@ function renderInspector() {
   if (query) {
     row("Wall / CPU", `${seconds(query.wall_s)} / ${seconds(query.cpu_s)}`, "inspector-seconds");
     if (query.execution_s) row("Execution", seconds(query.execution_s));
+    if (query.reused_from !== null && query.reused_from !== undefined) {
+      row("Reused", `the answer of node ${query.reused_from} (same query; no sampler ran)`, "inspector-reused");
+    }
     if (query.error) row("Error", `<span class="error-text">${escapeHtml(query.error)}</span>`, "inspector-error");
   }
   const visits = node.visit
