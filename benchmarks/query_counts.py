@@ -6,8 +6,10 @@
 Reads the stream queries each trial's run stored (reused results are not stored, so they do
 not count) and prints, per planner: trials, the mean number of queries of the stream per
 trial, how many trials made at most ``--at-most`` of them, the mean seconds they took per
-trial and per query, and the mean planning seconds. With ``plan-motion`` on kitchen-4 (a plan
-needs 12 motions) this says how close a planner comes to planning only what it keeps.
+trial and per query, the mean planning seconds, and how many trials reused results of the
+stream (``stream_queried`` events with ``reused_from``) and how many results in all. With
+``plan-motion`` on kitchen-4 (a plan needs 12 motions) this says how close a planner comes to
+planning only what it keeps.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import argparse
 import statistics
 import sys
 
+from planner.events import StreamQueried
 from planner.store import RunStore
 
 
@@ -33,24 +36,35 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         print(
             f"| planner | trials | mean {args.stream} queries | trials with at most "
-            f"{args.at_most} | mean s per trial | s per query | mean planning s |"
+            f"{args.at_most} | mean s per trial | s per query | mean planning s | "
+            "trials reusing | results reused |"
         )
-        print("| --- | --- | --- | --- | --- | --- | --- |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
         for planner in sorted({t.planner for t in trials}):
             mine = [t for t in trials if t.planner == planner]
-            counts, seconds = [], []
+            counts, seconds, reused = [], [], []
             for t in mine:
                 assert t.run_id is not None
                 queries = store.stream_queries(stream=args.stream, run_ids=[t.run_id])
                 counts.append(len(queries))
                 seconds.append(sum(q.wall_s for q in queries))
+                reused.append(
+                    sum(
+                        1
+                        for e in store.events(t.run_id)
+                        if isinstance(e, StreamQueried)
+                        and e.stream == args.stream
+                        and e.reused_from is not None
+                    )
+                )
             planning = [t.planning_s for t in mine if t.planning_s is not None]
             per_query = sum(seconds) / sum(counts) if sum(counts) else float("nan")
             print(
                 f"| {planner} | {len(mine)} | {statistics.mean(counts):.1f} | "
                 f"{sum(1 for c in counts if c <= args.at_most)} | "
                 f"{statistics.mean(seconds):.1f} | {per_query:.2f} | "
-                f"{statistics.mean(planning):.1f} |"
+                f"{statistics.mean(planning):.1f} | {sum(1 for r in reused if r)} | "
+                f"{sum(reused)} |"
             )
     return 0
 
