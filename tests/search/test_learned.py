@@ -314,6 +314,16 @@ class CrowdedOracle(ReachOracle):
         ]
 
 
+def crowded_search() -> tuple[TreeSearch, LearnedPolicy, str, Any]:
+    """A line search under :class:`CrowdedOracle`: (search, policy, a's pose object, the first
+    plan's node, added by hand)."""
+    search, policy = make(ListSink())
+    policy.predictor = CrowdedOracle()
+    a_pose = search.skeletons[0].stream_plan[1].outputs[0]
+    top = search.tree.add(ROOT, plan_index=0, depth=0, success=True)
+    return search, policy, a_pose, top
+
+
 def test_the_same_query_failing_under_choices_it_does_not_read_is_a_dead_end() -> None:
     """Failures of one query count together across the nodes that make it (same inputs, same
     relevant state), as long as it never succeeded. b's pose fails to sample once after each of
@@ -321,12 +331,8 @@ def test_the_same_query_failing_under_choices_it_does_not_read_is_a_dead_end() -
     milliseconds barely raises the cost of trying again, so only the dead end makes the search
     go back (kitchen-4 seed 1000: the last stove placement failed once after each of 13 new
     grasps, IK solutions and motions of that block, and the crowded stove was never blamed)."""
-    search, policy = make(ListSink())
-    policy.predictor = CrowdedOracle()
+    search, policy, a_pose, top = crowded_search()
     tree = search.tree
-    plan = search.skeletons[0]
-    a_pose = plan.stream_plan[1].outputs[0]
-    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
     choose_a = tree.add(top.id, plan_index=0, depth=1, success=True)
     placed_a = tree.add(choose_a.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0})
     reached_a = tree.add(placed_a.id, plan_index=0, depth=3, success=True)
@@ -383,12 +389,8 @@ def test_an_attempt_that_has_not_reached_the_failures_does_not_stop_the_pooling(
     doomed results are dead ends (kitchen-4 seed 1025: every re-sampled grasp made a new maker
     of the third block's stove placement, and its unexplored child kept the crowded stove from
     being blamed for 521 placements)."""
-    search, policy = make(ListSink())
-    policy.predictor = CrowdedOracle()
+    search, policy, a_pose, top = crowded_search()
     tree = search.tree
-    plan = search.skeletons[0]
-    a_pose = plan.stream_plan[1].outputs[0]
-    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
     makers = [tree.add(top.id, plan_index=0, depth=1, success=True) for _ in range(3)]
     placed = [
         tree.add(m.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0}) for m in makers
