@@ -47,14 +47,16 @@ def main(
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s worker %(name)s: %(message)s"
     )
-    from planner.runs import RunConfig, record_run
+    from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
 
     lock = threading.Lock()
     store = RunStore(database)
     sink = PipeSink(run_id, conn, lock)
     try:
-        record_run(RunConfig(**config), store, run_id, sinks=(sink,), should_stop=stop.is_set)
+        run_config = RunConfig(**config)
+        preload_libraries(run_config)
+        record_run(run_config, store, run_id, sinks=(sink,), should_stop=stop.is_set)
     except KeyboardInterrupt:
         log.warning("run %s interrupted", run_id)
     except Exception:

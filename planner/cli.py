@@ -351,7 +351,7 @@ def _print_text(
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from planner.runs import RunConfig, check_plan, record_run, run
+    from planner.runs import RunConfig, check_plan, preload_libraries, record_run, run
     from planner.store import RunStore, default_db_path
 
     config = RunConfig(
@@ -365,6 +365,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         order=args.order,
     )
     problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
+    preload_libraries(config)
     progress = _progress_line()
     if args.no_record:
         result, loaded, problem = run(config, progress=progress)

@@ -58,7 +58,7 @@ class TrialResult:
 
 def run_trial(trial: Trial, db: str) -> TrialResult:
     """One recorded run (in the calling process); crashes become failed results."""
-    from planner.runs import RunConfig, record_run
+    from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
 
     store = RunStore(db)
@@ -70,6 +70,7 @@ def run_trial(trial: Trial, db: str) -> TrialResult:
         model=trial.model,
         order=trial.order,
     )
+    preload_libraries(config)
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config))
     try:
         recorded = record_run(config, store, run_id)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -46,3 +48,25 @@ def test_a_crashing_trial_is_recorded_and_the_batch_goes_on(tmp_path: Path) -> N
     # The progress line counts per planner, so a failure shows where it happened.
     assert lines[-1].startswith("[2/2] baseline 1/2 solved (median planning ")
     assert "about 0 s left" in lines[-1]
+
+
+def test_a_model_trial_imports_torch_before_its_clock_starts(tmp_path: Path) -> None:
+    # Library imports are process set-up for every planner: the baseline's come with
+    # planner.runs; a learned trial must not pay torch's import as planning seconds.
+    script = f"""
+import sys
+import planner.runs
+from planner.experiment import Trial, run_trial
+seen = []
+def record_run(config, store, run_id):
+    seen.append("torch" in sys.modules)
+    raise RuntimeError("stop here")
+planner.runs.record_run = record_run
+for planner in ("baseline", "learned"):
+    run_trial(Trial({LINE!r}, 1, planner, 30.0), {str(tmp_path / "t.db")!r})
+print(seen)
+"""
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.strip().splitlines()[-1] == "[False, True]"
