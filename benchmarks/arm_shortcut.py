@@ -32,8 +32,12 @@ import numpy as np
 
 
 def seeds(text: str) -> list[int]:
+    """LO-HI (or one seed) as a list; ValueError if it is not that."""
     lo, _, hi = text.partition("-")
-    return list(range(int(lo), int(hi or lo) + 1))
+    out = list(range(int(lo), int(hi or lo) + 1))
+    if not out:
+        raise ValueError(text)
+    return out
 
 
 def measure(scene: str, seed: int, planner: str, steps: list[int]) -> list[dict[int, Any]]:
@@ -115,7 +119,7 @@ def compare_full(args: argparse.Namespace, a: int, b: int) -> int:
     ctx = multiprocessing.get_context("spawn")
     out: dict[tuple[int, int], dict[str, Any]] = {}
     jobs = []
-    for i, seed in enumerate(seeds(args.seeds)):
+    for i, seed in enumerate(args.seed_list):
         jobs += [(seed, s) for s in ((a, b) if i % 2 == 0 else (b, a))]
     for n, (seed, s) in enumerate(jobs, 1):
         with ctx.Pool(1, maxtasksperchild=1) as pool:
@@ -123,12 +127,12 @@ def compare_full(args: argparse.Namespace, a: int, b: int) -> int:
         out[(seed, s)] = r
         total = f"{r['planning'] + r['execution']:.1f} s" if r["solved"] else "unsolved"
         print(f"[{n}/{len(jobs)}] seed {seed}, {s} steps: {total}", file=sys.stderr)
-    both = [sd for sd in seeds(args.seeds) if out[(sd, a)]["solved"] and out[(sd, b)]["solved"]]
+    both = [sd for sd in args.seed_list if out[(sd, a)]["solved"] and out[(sd, b)]["solved"]]
     print(f"{args.planner} on {args.scene} seeds {args.seeds}: {len(both)} solved with both")
     print("| arm steps | solved | planning s | execution s | total s | motion queries |")
     print("| --- | --- | --- | --- | --- | --- |")
     for s in (a, b):
-        solved = sum(out[(sd, s)]["solved"] for sd in seeds(args.seeds))
+        solved = sum(out[(sd, s)]["solved"] for sd in args.seed_list)
         rows = [out[(sd, s)] for sd in both]
         cells = [
             np.mean([r["planning"] for r in rows]),
@@ -137,7 +141,7 @@ def compare_full(args: argparse.Namespace, a: int, b: int) -> int:
             np.mean([r["motions"] for r in rows]),
         ]
         print(
-            f"| {s} | {solved}/{len(seeds(args.seeds))} | "
+            f"| {s} | {solved}/{len(args.seed_list)} | "
             + " | ".join(f"{c:.1f}" for c in cells)
             + " |"
         )
@@ -171,6 +175,10 @@ def main() -> int:
     parser.add_argument("--full", default=None, help="A,B: whole runs with A and with B steps")
     parser.add_argument("--budget", type=float, default=300.0, help="with --full")
     args = parser.parse_args()
+    try:
+        args.seed_list = seeds(args.seeds)
+    except ValueError:
+        parser.error("--seeds takes LO-HI or one seed (integers, LO <= HI)")
     if args.full is not None:
         try:
             a, b = (int(x) for x in args.full.split(","))
@@ -188,7 +196,7 @@ def main() -> int:
     used = SamplerConfig().arm_motion.shortcut_steps
     ctx = multiprocessing.get_context("spawn")  # OMPL takes one seed per process
     rows: list[dict[int, Any]] = []
-    for seed in seeds(args.seeds):
+    for seed in args.seed_list:
         with ctx.Pool(1) as pool:
             rows += pool.apply(measure, (args.scene, seed, args.planner, steps))
     if not rows:
