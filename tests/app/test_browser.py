@@ -43,10 +43,11 @@ def _get(url: str) -> Any:
 
 
 class Server:
-    def __init__(self, url: str, process: subprocess.Popen[bytes], log: Path) -> None:
+    def __init__(self, url: str, process: subprocess.Popen[bytes], log: Path, db: Path) -> None:
         self.url = url
         self.process = process
         self.log = log
+        self.db = db
 
     def api(self, path: str) -> Any:
         return _get(self.url + path)
@@ -89,7 +90,7 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
                 process.terminate()
                 pytest.fail(f"tamp serve did not answer /api/health:\n{log.read_text()}")
             time.sleep(0.2)
-    yield Server(url, process, log)
+    yield Server(url, process, log, tmp / "runs.db")
     process.terminate()
     try:
         process.wait(20)
@@ -394,3 +395,83 @@ def test_kitchen_baseline_run_grows_live(page: Any, server: Server) -> None:
     viewer.get_by_text("Connected").first.wait_for(timeout=30_000)  # viser's own status
     frame.screenshot(path=str(ARTIFACTS / "viewer-in-page.png"))
     page.screenshot(path=str(ARTIFACTS / "page.png"), full_page=True)
+
+
+def _record_reuse_run(db: Path) -> str:
+    """Record, into the server's store, a run of the visit domain (tests/search/test_reuse.py)
+    in which a motion made in one branch is reused in another: no sampler ran for it."""
+    from planner.events import AbstractPlansFound, RunFinished, RunStarted
+    from planner.store import RunStore, StoreSink
+    from tests.search.test_reuse import make
+
+    store = RunStore(db)
+    run_id = store.create_run("visit", 0, "baseline", {})
+    sink = StoreSink(store, run_id)
+    search, _ = make(sink, run_id)
+    assert search.emitter is not None
+    search.emitter.emit(RunStarted, scene="visit", seed=0, planner="baseline", config={})
+    search.emitter.emit(
+        AbstractPlansFound,
+        plans=[
+            {
+                "index": i,
+                "cost": p.cost,
+                "actions": [str(a) for a in p.actions],
+                "streams": [str(s) for s in p.stream_plan],
+            }
+            for i, p in enumerate(search.skeletons)
+        ],
+        seconds=0.01,
+    )
+    top = search._open_plan(0)
+    first, second = search._query(top), search._query(top)
+    search._query(first)
+    search._query(second)  # the same motion from the other IK child: reused
+    queries = len(search.queries)
+    search.emitter.emit(
+        RunFinished,
+        status="timeout",
+        planning_s=0.1,
+        execution_s=None,
+        oracle_s=None,
+        queries=queries,
+        message="no plan (timeout)",
+    )
+    sink.close()
+    store.finish_run(
+        run_id, "timeout", planning_s=0.1, queries=queries, message="no plan (timeout)"
+    )
+    store.close()
+    return run_id
+
+
+def test_a_reused_query_is_shown_as_reused(page: Any, server: Server) -> None:
+    run_id = _record_reuse_run(server.db)
+    events = server.events(run_id)
+    reused = [e for e in events if e["type"] == "stream_queried" and e["reused_from"] is not None]
+    assert len(reused) == 1
+    query = reused[0]
+    page.reload()
+    row = page.locator(f'#runs-list [data-run-id="{run_id}"]')
+    row.click()
+    page.wait_for_function(f"window.dashboard.state().runId === '{run_id}'")
+    page.wait_for_function(f"window.dashboard.state().last === {len(events) - 1}")
+
+    # The stepper names the query as reused, and from which node, instead of its seconds.
+    page.click("#btn-first")
+    for _ in range(events.index(query)):
+        page.click("#btn-step-forward")
+    assert _step(page) == events.index(query)
+    line = page.locator("#step-event").inner_text()
+    assert f"reused from node {query['reused_from']}" in line, line
+    assert "ok" in line
+
+    # The inspector of the reused node says whose answer it is.
+    node = next(e for e in events if e["type"] == "node_added" and e["node_id"] == query["node_id"])
+    _click_node(page, node)
+    shown = page.locator('#inspector [data-testid="inspector-reused"]')
+    assert f"the answer of node {query['reused_from']}" in shown.inner_text()
+    original = next(
+        e for e in events if e["type"] == "stream_queried" and e["node_id"] == query["reused_from"]
+    )
+    assert original["reused_from"] is None  # the original ran its sampler
