@@ -68,6 +68,12 @@ def rough_path(
     si = ss.getSpaceInformation()
     si.setStateValidityCheckingResolution(config.resolution)
     si.setup()
+    for name, state in (("start", start), ("goal", goal)):
+        if not si.isValid(state):
+            # No path; OMPL's planners would say so on stderr, past the log level, at every
+            # such query (a conf that collides once a later choice moved a block next to it).
+            log.debug("no motion: the %s state is in collision", name)
+            return None
     if si.checkMotion(start, goal):
         # The straight move is free: the shortest path, and no tree to grow.
         return og.PathGeometric(si, start, goal), False

@@ -65,6 +65,17 @@ def test_blocked_goal_fails_within_its_time_limit() -> None:
     )
 
 
+@pytest.mark.parametrize("end", ["start", "goal"])
+def test_a_colliding_end_fails_at_once_and_quietly(
+    end: str, capfd: pytest.CaptureFixture[str]
+) -> None:
+    inside = (0.0, 0.0, 0.0)  # in the wall
+    start, goal = ((-1.0, 0.0, 0.0), inside) if end == "goal" else (inside, (1.0, 0.0, 0.0))
+    assert plan_base_motion(start, goal, wall, bounds=(-2, 2, -2, 2)) is None
+    # The failed query is the planner's answer; OMPL's own error lines never reach the console.
+    assert capfd.readouterr().err == ""
+
+
 def test_joint_path_respects_bounds_and_obstacle() -> None:
     def valid(q: tuple[float, ...]) -> bool:
         return not (0.4 < q[0] < 0.6 and q[1] < 0.9)
