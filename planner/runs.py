@@ -11,7 +11,7 @@ import logging
 import time
 import uuid
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -144,6 +144,19 @@ def jsonable(value: Any) -> Any:
         return repr(value)
 
 
+def plan_summaries(plans: Sequence[AbstractPlan]) -> list[dict[str, Any]]:
+    """The abstract plans as an ``abstract_plans_found`` event carries them."""
+    return [
+        {
+            "index": i,
+            "cost": p.cost,
+            "actions": [str(a) for a in p.actions],
+            "streams": [str(s) for s in p.stream_plan],
+        }
+        for i, p in enumerate(plans)
+    ]
+
+
 def run(
     config: RunConfig,
     *,
@@ -220,19 +233,7 @@ def _run(
             plans, states = _model_order(
                 predictor, plans, states, initial, fluents, loaded.static_context(problem)
             )
-    emitter.emit(
-        AbstractPlansFound,
-        plans=[
-            {
-                "index": i,
-                "cost": p.cost,
-                "actions": [str(a) for a in p.actions],
-                "streams": [str(s) for s in p.stream_plan],
-            }
-            for i, p in enumerate(plans)
-        ],
-        seconds=abstract.seconds["total"],
-    )
+    emitter.emit(AbstractPlansFound, plans=plan_summaries(plans), seconds=abstract.seconds["total"])
     runtime = loaded.runtime(problem, seed=config.seed)
     deadline = start + config.budget_s
     if config.planner == "sequential":

@@ -401,6 +401,7 @@ def _record_reuse_run(db: Path) -> str:
     """Record, into the server's store, a run of the visit domain (tests/search/test_reuse.py)
     in which a motion made in one branch is reused in another: no sampler ran for it."""
     from planner.events import AbstractPlansFound, RunFinished, RunStarted
+    from planner.runs import plan_summaries
     from planner.store import RunStore, StoreSink
     from tests.search.test_reuse import make
 
@@ -410,19 +411,7 @@ def _record_reuse_run(db: Path) -> str:
     search, _ = make(sink, run_id)
     assert search.emitter is not None
     search.emitter.emit(RunStarted, scene="visit", seed=0, planner="baseline", config={})
-    search.emitter.emit(
-        AbstractPlansFound,
-        plans=[
-            {
-                "index": i,
-                "cost": p.cost,
-                "actions": [str(a) for a in p.actions],
-                "streams": [str(s) for s in p.stream_plan],
-            }
-            for i, p in enumerate(search.skeletons)
-        ],
-        seconds=0.01,
-    )
+    search.emitter.emit(AbstractPlansFound, plans=plan_summaries(search.skeletons), seconds=0.01)
     top = search._open_plan(0)
     first, second = search._query(top), search._query(top)
     search._query(first)
