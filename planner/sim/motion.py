@@ -71,7 +71,7 @@ def rough_path(
     for name, state in (("start", start), ("goal", goal)):
         if not si.isValid(state):
             # No path; OMPL's planners would say so on stderr, past the log level, at every
-            # such query (a conf that collides once a later choice moved a block next to it).
+            # such query (kitchen-6 asks for some; why its confs collide is not looked into).
             log.debug("no motion: the %s state is in collision", name)
             return None
     if si.checkMotion(start, goal):
