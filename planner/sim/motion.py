@@ -71,7 +71,8 @@ def rough_path(
     for name, state in (("start", start), ("goal", goal)):
         if not si.isValid(state):
             # No path; OMPL's planners would say so on stderr, past the log level, at every
-            # such query (kitchen-6 asks for some; why its confs collide is not looked into).
+            # such query. (Kitchen-6 asked for some: picks that lifted the block next to its
+            # neighbour, which the pick's IK now refuses.)
             log.debug("no motion: the %s state is in collision", name)
             return None
     if si.checkMotion(start, goal):

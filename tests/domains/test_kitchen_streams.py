@@ -17,7 +17,7 @@ from planner.domains.kitchen.geometry import BlockPose
 from planner.domains.kitchen.plan_io import read_plan, write_plan
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig
 from planner.domains.kitchen.validate import validate_plan
-from planner.domains.kitchen.values import Grasp, Trajectory
+from planner.domains.kitchen.values import Conf, Grasp, Trajectory
 from planner.pddl import Atom
 from planner.search import BoundPlan, bind_sequentially
 from planner.streams import StreamContext
@@ -165,6 +165,40 @@ def test_ik_refuses_a_pick_whose_retreat_drags_the_block_into_the_table() -> Non
         samplers.world.set_blocks({"b4": pose})
         assert samplers._straight_ok(base, 0.2, approach, arm, ("b4",))  # the hand going in
         assert not samplers._retreat_ok(base, 0.2, approach, arm, "b4", grasp)  # and out
+    finally:
+        samplers.close()
+
+
+def test_ik_refuses_a_pick_that_lifts_the_block_next_to_its_neighbour() -> None:
+    """Regression (kitchen-6, baseline, seed 1022): backing off from a side grasp on b5 brings
+    the block within the motion planner's 1.5 cm of b2. IK used to return such a pick, and every
+    motion from it failed at once (its start state collides); now the pick fails in IK."""
+    _, problem = problem_for_scene("kitchen-6", seed=1022)
+    geometry = problem.values[GEOMETRY_KEY]
+    samplers = KitchenSamplers(geometry, random.Random(0))  # type: ignore[arg-type]
+    quat = (-0.1404804310189812, -0.14048043101898117, 0.6930117232058354, -0.6930117232058353)
+    grasp = Grasp("side", ((0.0, 0.0, 0.01), quat), 0.1)
+    poses = geometry.initial_poses(1022)  # type: ignore[attr-defined]
+    picked = Conf(
+        (1.833292633269895, -0.3752551101234534, 2.903595247779996),
+        0.2,
+        (-0.5871638891923633, 0.32303666610168563, -1.5499999999999998, -1.2248264826847746,
+         -0.8819073657035434, -0.6315606012217642, 1.9977835152819123),
+        (-0.7573352302024136, 0.2613306648451112, -1.5499999999999998, -1.3327325605992508,
+         -0.8364432965863391, -0.7163652970357287, 2.0010937380889784),
+    )  # fmt: skip
+    values = {f"p-{b}": p for b, p in poses.items()}
+    on_table = StreamContext(frozenset(Atom("at-pose", (b, f"p-{b}")) for b in poses), values)
+    try:
+        samplers.world.set_blocks(poses)
+        # The pick IK returned: reachable, its retreat free, its approach clear with the hand
+        # empty; but not with b5 in the hand, where the motion away starts.
+        assert samplers._retreat_ok(picked.base, 0.2, picked.approach_arm, picked.arm, "b5", grasp)
+        samplers.world.set_conf(picked, approach=True)
+        assert not samplers.world.robot_collides(clearance=SamplerConfig().clearance)
+        assert not samplers._lifted_clear(picked, "b5", grasp)
+        # No base pose helps: this grasp always lifts b5 towards b2.
+        assert samplers.inverse_kinematics("b5", poses["b5"], grasp, context=on_table) is None
     finally:
         samplers.close()
 

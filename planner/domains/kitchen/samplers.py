@@ -266,6 +266,8 @@ class KitchenSamplers:
                 # Motion planning starts and ends here, so it must keep the same clearance.
                 if world.robot_collides(clearance=self.config.clearance):
                     continue
+                if not placing and not self._lifted_clear(conf, block, grasp):
+                    continue
                 return (conf,)
         return None
 
@@ -307,6 +309,20 @@ class KitchenSamplers:
         self.world.hold(block, grasp)
         try:
             return self._straight_ok(base, torso, arm, approach, ())
+        finally:
+            self.world.hold(None)
+            self.world.set_blocks(placed)
+
+    def _lifted_clear(self, conf: Conf, block: str, grasp: Grasp) -> bool:
+        """Picking, the motion away starts back at the approach with the block in the hand: the
+        block must keep the motion planner's clearance there too. (Without this check a side
+        grasp could lift a block to within 1.5 cm of its neighbour, and every motion from the
+        conf then failed at once: 27 motion queries of one kitchen-6 benchmark.)"""
+        placed = dict(self.world._placed)
+        self.world.hold(block, grasp)
+        try:
+            self.world.set_conf(conf, approach=True)
+            return not self.world.robot_collides(clearance=self.config.clearance)
         finally:
             self.world.hold(None)
             self.world.set_blocks(placed)
