@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+import multiprocessing
 import random
 import statistics
 import sys
@@ -121,7 +122,10 @@ def main() -> int:
         order = settings if i % 2 == 0 else settings[::-1]
         jobs += [(args.scene, seed, c, args.planner, args.budget) for c in order]
     results: dict[tuple[int, str], dict[str, float] | None] = {}
-    with ProcessPoolExecutor(args.workers) as pool:
+    # A fresh interpreter per trial: OMPL takes one seed per process, so a reused worker would
+    # plan each later trial from wherever the first one left its random generator.
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(args.workers, mp_context=ctx, max_tasks_per_child=1) as pool:
         for n, (seed, setting, figures) in enumerate(pool.map(_trial, jobs), 1):
             results[(seed, setting)] = figures
             got = "unsolved" if figures is None else f"total {figures['total']:.1f} s"
