@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -31,6 +32,7 @@ DEFAULT_PLANNER = "rrtconnect"  # RRT-Connect, simplified, as in eTAMP and PDDLS
 class MotionConfig:
     planner: str = DEFAULT_PLANNER  # OMPL planner by name
     timeout_s: float = 1.0  # planning time limit of one query
+    iterations: int | None = None  # planner iterations per query (None: the time limit only)
     resolution: float = 0.004  # collision-check step, share of the space extent (~2 cm, 0.05 rad)
     shortcut_steps: int = 100  # random partial shortcuts between two greedy passes (0: none)
     waypoints: int = 0  # interpolate the simplified path to at least this many states (0: keep)
@@ -42,6 +44,8 @@ class MotionConfig:
             )
         if self.timeout_s <= 0 or not 0 < self.resolution < 1:
             raise ValueError("timeout_s must be positive and resolution in (0, 1)")
+        if self.iterations is not None and self.iterations < 1:
+            raise ValueError("iterations must be at least 1 (or None: the time limit only)")
         if self.shortcut_steps < 0:
             raise ValueError("shortcut_steps must be >= 0")
 
@@ -79,7 +83,36 @@ def rough_path(
         # The straight move is free: the shortest path, and no tree to grow.
         return og.PathGeometric(si, start, goal), False
     ss.setPlanner(PLANNERS[config.planner](si))
-    solved = ss.solve(config.timeout_s)
+    checks = 0
+    timed_out = False
+    started = time.perf_counter()
+    deadline = started + config.timeout_s
+
+    def stop() -> bool:
+        nonlocal checks, timed_out
+        checks += 1
+        if config.iterations is not None and checks > config.iterations:
+            return True
+        timed_out = time.perf_counter() > deadline
+        return timed_out
+
+    solved = ss.solve(ob.PlannerTerminationCondition(stop))
+    if timed_out and config.iterations is not None:
+        log.warning(
+            "a motion search hit its %g s guard after %d of %d iterations: on a machine this "
+            "loaded, its outcome depends on the load",
+            config.timeout_s,
+            checks,
+            config.iterations,
+        )
+    log.debug(
+        "%s in %d dimensions: %d termination checks in %.3f s, solved: %s",
+        config.planner,
+        si.getStateDimension(),
+        checks,
+        time.perf_counter() - started,
+        bool(solved),
+    )
     if not solved or not ss.haveExactSolutionPath():
         return None
     return ss.getSolutionPath(), True
