@@ -31,8 +31,12 @@ DEFAULT_PLANNER = "rrtconnect"  # RRT-Connect, simplified, as in eTAMP and PDDLS
 @dataclass(frozen=True)
 class MotionConfig:
     planner: str = DEFAULT_PLANNER  # OMPL planner by name
-    timeout_s: float = 1.0  # planning time limit of one query
-    iterations: int | None = None  # planner iterations per query (None: the time limit only)
+    # A search stops after ``iterations`` planner iterations, so that its outcome does not
+    # depend on the machine's speed or load (the base's 150 take about 1.2 s on an idle
+    # machine: benchmarks/motion_iterations.py). ``timeout_s`` only guards against a machine
+    # so loaded that they would take longer; a search it stops is logged. None: time only.
+    iterations: int | None = 150
+    timeout_s: float = 10.0
     resolution: float = 0.004  # collision-check step, share of the space extent (~2 cm, 0.05 rad)
     shortcut_steps: int = 100  # random partial shortcuts between two greedy passes (0: none)
     waypoints: int = 0  # interpolate the simplified path to at least this many states (0: keep)
