@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 from ompl import geometric as og
-from shortcut import _ratio, _seconds
+from shortcut import _ratio, _seconds, solved_trials
 
 from planner.domains.kitchen.geometry import BlockPose, geometry_from_scene
 from planner.domains.kitchen.plan_io import decode
@@ -100,16 +100,10 @@ def main() -> int:
     if args.trials < 1 or args.tries < 1 or args.rrtstar_s <= 0:
         parser.error("--trials and --tries must be at least 1 and --rrtstar-s positive")
     with RunStore(args.db) as store:
-        try:
-            bench = store.get_bench(args.bench_id)
-        except KeyError as exc:  # the message lists the known benchmarks
-            print(exc.args[0], file=sys.stderr)
+        found = solved_trials(store, args.bench_id, args.planner)
+        if found is None:
             return 2
-        trials = [
-            t
-            for t in store.bench_trials(args.bench_id)
-            if t.status == "solved" and t.run_id is not None and t.planner == args.planner
-        ][: args.trials]
+        bench, trials = found[0], found[1][: args.trials]
         plans = [(t.seed, t.execution_s, store.get_run(str(t.run_id)).plan) for t in trials]
     if not plans:
         print(f"no solved {args.planner} trial in benchmark {args.bench_id}", file=sys.stderr)

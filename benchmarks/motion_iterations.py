@@ -21,6 +21,7 @@ import sys
 from dataclasses import dataclass
 
 import numpy as np
+from base_choice import _parse_seeds
 
 from planner.domains.kitchen.samplers import SamplerConfig
 from planner.runs import PLANNERS, RunConfig, run
@@ -43,13 +44,6 @@ class _Recorder(logging.Handler):
         if "termination checks" in record.msg and isinstance(record.args, tuple):
             _, dims, checks, seconds, solved = record.args
             self.searches.append(Search(int(dims), int(checks), float(seconds), bool(solved)))
-
-
-def _parse_seeds(text: str) -> list[int]:
-    if "-" in text:
-        lo, hi = text.split("-", 1)
-        return list(range(int(lo), int(hi) + 1))
-    return [int(s) for s in text.split(",")]
 
 
 def main() -> int:

@@ -30,6 +30,7 @@ from planner.scene import load_scene
 from planner.sim.motion import MotionConfig, base_problem, rough_path, seed_ompl, shorten
 from planner.sim.pr2_model import REST_ARM_CONF
 from planner.store import RunStore
+from planner.store.db import BenchRecord, BenchTrialRecord
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +46,24 @@ def base_moves(plan: dict) -> list[BaseMove]:  # type: ignore[type-arg]
                 if seg["kind"] == "base":
                     moves.append((tuple(seg["base"][0]), tuple(seg["base"][-1])))
     return moves
+
+
+def solved_trials(
+    store: RunStore, bench_id: str, planner: str | None = None
+) -> tuple[BenchRecord, list[BenchTrialRecord]] | None:
+    """A benchmark and its solved trials (of ``planner``, if given), or None when the store has
+    no such benchmark (the known ones are then listed on stderr)."""
+    try:
+        bench = store.get_bench(bench_id)
+    except KeyError as exc:  # the message lists the known benchmarks
+        print(exc.args[0], file=sys.stderr)
+        return None
+    trials = [
+        t
+        for t in store.bench_trials(bench_id)
+        if t.status == "solved" and t.run_id is not None and planner in (None, t.planner)
+    ]
+    return bench, trials
 
 
 def _seconds(path: og.PathGeometric) -> float:
@@ -78,16 +97,11 @@ def main() -> int:
     if args.trials < 1 or args.steps < 0:
         parser.error("--trials must be at least 1 and --steps at least 0")
     with RunStore(args.db) as store:
-        try:
-            bench = store.get_bench(args.bench_id)
-        except KeyError as exc:  # the message lists the known benchmarks
-            print(exc.args[0], file=sys.stderr)
+        found = solved_trials(store, args.bench_id)
+        if found is None:
             return 2
-        runs = [
-            (t.seed, t.run_id)
-            for t in store.bench_trials(args.bench_id)
-            if t.status == "solved" and t.run_id is not None
-        ]
+        bench, trials = found
+        runs = [(t.seed, str(t.run_id)) for t in trials]
         plans = [(seed, store.get_run(run_id).plan) for seed, run_id in runs[: args.trials]]
     geometry = geometry_from_scene(load_scene(bench.config["scene"]))
     samplers = KitchenSamplers(geometry, random.Random(0))
