@@ -32,7 +32,7 @@ DEFAULT_PLANNER = "rrtconnect"  # RRT-Connect, simplified, as in eTAMP and PDDLS
 class MotionConfig:
     planner: str = DEFAULT_PLANNER  # OMPL planner by name
     # A search stops after ``iterations`` planner iterations, so that its outcome does not
-    # depend on the machine's speed or load (the base's 150 take about 1.2 s on an idle
+    # depend on the machine's speed or load (the base's 150 take about 1.1 s on an idle
     # machine: benchmarks/motion_iterations.py). ``timeout_s`` only guards against a machine
     # so loaded that they would take longer; a search it stops is logged. None: time only.
     iterations: int | None = 150
