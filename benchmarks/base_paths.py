@@ -42,7 +42,7 @@ from planner.domains.kitchen.plan_io import decode
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig, _base_duration
 from planner.domains.kitchen.values import Conf, Grasp, Trajectory
 from planner.scene import load_scene
-from planner.sim.motion import base_problem, rough_path, seed_ompl, shorten
+from planner.sim.motion import NoPath, base_problem, rough_path, seed_ompl, shorten
 from planner.sim.pr2_model import REST_ARM_CONF
 from planner.store import RunStore
 
@@ -139,12 +139,15 @@ def main() -> int:
                 t0 = time.perf_counter()
                 ss, s0, s1 = base_problem(start, goal, valid, samplers.bounds)
                 found = rough_path(ss, s0, s1, config, None)
-                if found is not None and not found[1]:
+                if isinstance(found, NoPath):
+                    spent.append(time.perf_counter() - t0)
+                    secs.append(math.inf)
+                    continue
+                if not found[1]:
                     break  # the straight line is free
-                if found is not None:
-                    path = shorten(ss.getSpaceInformation(), found[0], config.shortcut_steps)
+                path = shorten(ss.getSpaceInformation(), found[0], config.shortcut_steps)
                 spent.append(time.perf_counter() - t0)
-                secs.append(math.inf if found is None else _seconds(path))
+                secs.append(_seconds(path))
             if not secs:
                 straight += 1
                 continue

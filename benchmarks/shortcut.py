@@ -27,7 +27,14 @@ from planner.domains.kitchen.geometry import geometry_from_scene
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig, _base_duration
 from planner.domains.kitchen.values import Conf
 from planner.scene import load_scene
-from planner.sim.motion import MotionConfig, base_problem, rough_path, seed_ompl, shorten
+from planner.sim.motion import (
+    MotionConfig,
+    NoPath,
+    base_problem,
+    rough_path,
+    seed_ompl,
+    shorten,
+)
 from planner.sim.pr2_model import REST_ARM_CONF
 from planner.store import RunStore
 from planner.store.db import BenchRecord, BenchTrialRecord
@@ -122,8 +129,8 @@ def main() -> int:
         for start, goal in base_moves(plan or {}):
             ss, s0, s1 = base_problem(start, goal, valid, samplers.bounds)
             found = rough_path(ss, s0, s1, config, None)
-            if found is None or not found[1]:
-                straight += found is not None
+            if isinstance(found, NoPath) or not found[1]:
+                straight += not isinstance(found, NoPath)
                 continue
             raw, si = found[0], ss.getSpaceInformation()
             a, b = _copy(si, raw), _copy(si, raw)

@@ -179,6 +179,9 @@ class StreamQueried(_EventBase):
     # The node whose identical query (same stream, inputs and context) gave these outputs: no
     # sampler ran, so the store keeps no training row for it. None for a real query.
     reused_from: int | None = None
+    # Why a sampler that ran cleanly found nothing, when it said (the kitchen's: "base motion:
+    # no path in 150 iterations", "no IK solution ..."); None for a success or an error.
+    reason: str | None = None
 
     def _validate(self) -> None:
         self._non_negative("node_id", "wall_s", "cpu_s", "execution_s")
@@ -192,6 +195,8 @@ class StreamQueried(_EventBase):
             )
         if self.success and self.error is not None:
             self._fail("error", "a successful query has no error")
+        if self.success and self.reason is not None:
+            self._fail("reason", "a successful query has no failure reason")
 
 
 @dataclass(frozen=True)

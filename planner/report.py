@@ -12,14 +12,15 @@ from __future__ import annotations
 import html
 import json
 import math
+import re
 import statistics
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from planner.store import BenchTrialRecord, RunStore
+from planner.store import BenchTrialRecord, QueryOutcome, RunStore
 
 BOOTSTRAP = 5000  # resamples for the intervals
 MEASURES = ("planning", "execution", "total")
@@ -53,11 +54,47 @@ def _improvement(
     return {"n": n, "mean": float(point), "low": float(low), "high": float(high)}
 
 
+def failure_kind(q: QueryOutcome) -> str:
+    """A failed query's reason without its particulars (counts, the bracketed breakdown), so
+    that failures of one kind count together: "base: no path in N iterations"."""
+    if q.error is not None:
+        return f"error: {q.error.split(':', 1)[0]}"
+    if not q.reason:
+        return "no reason given"
+    kind = re.sub(r"\s*\(.*\)\s*$", "", q.reason)
+    return re.sub(r"\d+(\.\d+)?", "N", kind)
+
+
+def query_summary(outcomes: Iterable[QueryOutcome]) -> dict[str, Any]:
+    """Per stream: queries, failures and their seconds, and the failures by kind (most first)."""
+    streams: dict[str, dict[str, Any]] = {}
+    for q in outcomes:
+        entry = streams.setdefault(
+            q.stream, {"queries": 0, "failed": 0, "failed_s": 0.0, "kinds": {}}
+        )
+        entry["queries"] += 1
+        if q.success:
+            continue
+        entry["failed"] += 1
+        entry["failed_s"] += q.wall_s
+        kind = entry["kinds"].setdefault(failure_kind(q), {"count": 0, "seconds": 0.0})
+        kind["count"] += 1
+        kind["seconds"] += q.wall_s
+    for entry in streams.values():
+        entry["kinds"] = [
+            {"kind": k, **v}
+            for k, v in sorted(entry["kinds"].items(), key=lambda kv: (-kv[1]["count"], kv[0]))
+        ]
+    return dict(sorted(streams.items()))
+
+
 def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
     """Everything the report shows, as JSON data (``tamp report --json``)."""
     with RunStore(db) as store:
         bench = store.get_bench(bench_id)
         trials = store.bench_trials(bench_id)
+        outcomes = store.query_outcomes([t.run_id for t in trials if t.run_id])
+    planner_of = {t.run_id: t.planner for t in trials if t.run_id}
     config = bench.config
     planners: list[str] = list(config["planners"])
     budget = float(config["budget_s"])
@@ -81,6 +118,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             **{f"{m}_s": _stats([x[m] for x in times]) for m in MEASURES},  # over solved trials
             "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),
             "planning_over_oracle": _stats(ratios),
+            "queries": query_summary(q for q in outcomes if planner_of.get(q.run_id) == p),
         }
     rng = np.random.default_rng(0)
     reference = planners[0]
@@ -177,7 +215,31 @@ def table_markdown(summary: dict[str, Any]) -> str:
             f"{_fmt(b['mean'], True)} ({_fmt(b['low'], True)} to {_fmt(b['high'], True)}) over "
             f"the {b['n']} seeds both solved."
         )
+    lines += ["", *_query_markdown(summary)]
     return "\n".join(lines)
+
+
+def _kinds_text(entry: dict[str, Any], limit: int = 4) -> str:
+    kinds = entry["kinds"]
+    text = ", ".join(f"{k['kind']} {k['count']}" for k in kinds[:limit])
+    if len(kinds) > limit:
+        text += f", {len(kinds) - limit} other kinds"
+    return text
+
+
+def _query_markdown(summary: dict[str, Any]) -> list[str]:
+    """Stream queries per planner and stream: how many failed, their seconds, and why."""
+    lines = [
+        "| planner | stream | queries | failed | s in failures | failures by kind |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for p, s in summary["planners"].items():
+        for stream, e in s.get("queries", {}).items():
+            lines.append(
+                f"| {p} | {stream} | {e['queries']} | {e['failed']} | {e['failed_s']:.1f} | "
+                f"{_kinds_text(e) or '-'} |"
+            )
+    return lines
 
 
 def render_html(summary: dict[str, Any]) -> str:
@@ -314,6 +376,7 @@ def render_html(summary: dict[str, Any]) -> str:
         + head
         + table
         + "".join(parts)
+        + _query_html(summary)
         + _seed_table(summary)
         + "<details><summary>Data (JSON)</summary><pre>"
         + html.escape(json.dumps(summary, indent=1))
@@ -359,6 +422,27 @@ def _seed_table(summary: dict[str, Any]) -> str:
         f"<details><summary>Per seed ({len(rows)} seeds; the {unsolved} some planner did not "
         "solve first; links open the run on the dashboard serving this database)</summary>"
         f"<table><tr><th>seed</th>{head}</tr>{body}</table></details>"
+    )
+
+
+def _query_html(summary: dict[str, Any]) -> str:
+    """Stream queries per planner and stream, and the failures by kind (what the samplers said:
+    no path in the iteration limit, a start in collision, no IK ...)."""
+    body = []
+    for p, s in summary["planners"].items():
+        for stream, e in s.get("queries", {}).items():
+            kinds = "<br>".join(
+                f"{html.escape(k['kind'])}: {k['count']} ({k['seconds']:.1f} s)" for k in e["kinds"]
+            )
+            body.append(
+                f"<tr><td>{html.escape(p)}</td><td>{html.escape(stream)}</td>"
+                f"<td>{e['queries']}</td><td>{e['failed']}</td><td>{e['failed_s']:.1f}</td>"
+                f"<td style='text-align:left'>{kinds or '-'}</td></tr>"
+            )
+    return (
+        "<h2>Stream queries and why they failed</h2><table data-testid='query-table'><tr>"
+        "<th>planner</th><th>stream</th><th>queries</th><th>failed</th><th>s in failures</th>"
+        "<th>failures by kind (count, seconds)</th></tr>" + "".join(body) + "</table>"
     )
 
 

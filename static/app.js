@@ -540,7 +540,7 @@ function describe(ev) {
         (ev.reused_from !== null && ev.reused_from !== undefined
           ? `reused from node ${ev.reused_from}`
           : `in ${seconds(ev.wall_s)}`) +
-        ` → node ${ev.node_id}${ev.error ? `: ${ev.error}` : ""}`
+        ` → node ${ev.node_id}${ev.error ? `: ${ev.error}` : ev.reason ? `: ${ev.reason}` : ""}`
       );
     case "model_prediction":
       return `${t}prediction for node ${ev.node_id}: Q ${num(ev.q)} s, P_S ${num(ev.p_s)}`;
@@ -682,6 +682,7 @@ function renderInspector() {
       row("Reused", `the answer of node ${query.reused_from} (same query; no sampler ran)`, "inspector-reused");
     }
     if (query.error) row("Error", `<span class="error-text">${escapeHtml(query.error)}</span>`, "inspector-error");
+    if (query.reason) row("Why", escapeHtml(query.reason), "inspector-reason");
   }
   const visits = node.visit
     ? `${node.visit.visits} / ${num(node.visit.value)}`

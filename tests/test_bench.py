@@ -21,9 +21,9 @@ from planner.bench import (
 )
 from planner.cli import main
 from planner.learning.model import CostModel
-from planner.report import render_html, summarize
+from planner.report import failure_kind, query_summary, render_html, summarize
 from planner.runs import DEFAULT_MODEL
-from planner.store import RunStore
+from planner.store import QueryOutcome, RunStore
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
 
@@ -158,6 +158,16 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
     assert "baseline (x)" in page
     assert page.count("href='/#run=") == 4  # every trial links to its run on the dashboard
     assert f"Code: {code_revision()}" in page  # the commit the figures came from
+    # Every stored query is counted once, under its planner and stream.
+    with RunStore(local_db) as store:
+        for planner in ("baseline", "sequential"):
+            runs = [t.run_id for t in store.bench_trials(local_id) if t.planner == planner]
+            stored = store.stream_queries(run_ids=[r for r in runs if r])
+            counted = summary["planners"][planner]["queries"]
+            assert sum(e["queries"] for e in counted.values()) == len(stored)
+            assert sum(e["failed"] for e in counted.values()) == sum(not q.success for q in stored)
+        assert summary["planners"]["baseline"]["queries"]["test-reachable"]["failed"] > 0
+    assert "Stream queries and why they failed" in page
 
     out = tmp_path / "report.html"
     assert main(["report", local_id, "--db", str(local_db), "--out", str(out)]) == 0
@@ -223,3 +233,36 @@ def test_sigterm_stops_a_benchmark_cleanly_and_it_resumes(tmp_path: Path) -> Non
     with RunStore(db) as store:
         assert len(store.bench_trials(bench.id)) == 8
         assert store.get_bench(bench.id).status == "done"
+
+
+def test_failures_count_together_by_kind_most_first() -> None:
+    def failed(stream: str, reason: str | None, error: str | None = None) -> QueryOutcome:
+        return QueryOutcome("r", stream, False, 1.0, reason, error)
+
+    outcomes = [
+        failed("plan-motion", "base: no path in 150 iterations"),
+        failed("plan-motion", "arm to rest: the start is in collision"),
+        failed("plan-motion", "base: no path in 150 iterations"),
+        QueryOutcome("r", "plan-motion", True, 0.5, None, None),
+        failed("inverse-kinematics", "no arm configuration from 5 base poses (approach blocked 3)"),
+        failed(
+            "inverse-kinematics", "no arm configuration from 4 base poses (grasp in collision 2)"
+        ),
+        failed("sample-pose", None, "RuntimeError: IK diverged"),
+        failed("sample-pose", None),
+    ]
+    assert failure_kind(outcomes[0]) == "base: no path in N iterations"
+    summary = query_summary(outcomes)
+    motion = summary["plan-motion"]
+    assert (motion["queries"], motion["failed"], motion["failed_s"]) == (4, 3, 3.0)
+    assert [(k["kind"], k["count"]) for k in motion["kinds"]] == [
+        ("base: no path in N iterations", 2),
+        ("arm to rest: the start is in collision", 1),
+    ]
+    assert summary["inverse-kinematics"]["kinds"] == [
+        {"kind": "no arm configuration from N base poses", "count": 2, "seconds": 2.0}
+    ]
+    assert [k["kind"] for k in summary["sample-pose"]["kinds"]] == [
+        "error: RuntimeError",
+        "no reason given",
+    ]

@@ -178,10 +178,17 @@ def test_missing_and_extra_fields_are_named() -> None:
 
 def test_events_stored_before_a_field_with_a_default_was_added_still_load() -> None:
     data = event_to_dict(EXAMPLES["stream_queried"])
-    del data["reused_from"], data["context"]
+    del data["reused_from"], data["context"], data["reason"]
     event = event_from_dict(data)
     assert isinstance(event, StreamQueried)
-    assert event.reused_from is None and event.context == {}
+    assert event.reused_from is None and event.context == {} and event.reason is None
+
+
+def test_only_a_failure_has_a_reason() -> None:
+    data = event_to_dict(EXAMPLES["stream_queried"]) | {"success": True, "error": None}
+    with pytest.raises(ValueError, match="reason: a successful query has no failure reason"):
+        event_from_dict(data | {"reason": "no path"})
+    assert event_from_dict(data | {"reason": None}).reason is None  # type: ignore[attr-defined]
 
 
 def test_only_a_success_can_be_reused() -> None:

@@ -256,6 +256,7 @@ class TreeSearch:
                 error=result.error,
                 context=self._context_json(context),
                 reused_from=reused_from,
+                reason=result.reason,
             )
         self._added(child)
         return child

@@ -54,6 +54,16 @@ class MotionConfig:
             raise ValueError("shortcut_steps must be >= 0")
 
 
+@dataclass(frozen=True)
+class NoPath:
+    """Why a motion search gave no path; falsy, returned in place of the path."""
+
+    reason: str
+
+    def __bool__(self) -> bool:
+        return False
+
+
 _seeded: list[int] = []  # OMPL's random generator takes one seed per process
 
 
@@ -69,8 +79,9 @@ def seed_ompl(seed: int) -> None:
 
 def rough_path(
     ss: og.SimpleSetup, start: ob.State, goal: ob.State, config: MotionConfig, seed: int | None
-) -> tuple[og.PathGeometric, bool] | None:
-    """The straight move if it is free, else the planner's unshortened path (and True)."""
+) -> tuple[og.PathGeometric, bool] | NoPath:
+    """The straight move if it is free, else the planner's unshortened path (and True); or
+    why there is none."""
     if seed is not None:
         seed_ompl(seed)
     si = ss.getSpaceInformation()
@@ -82,7 +93,7 @@ def rough_path(
             # such query. (Kitchen-6 asked for some: picks that lifted the block next to its
             # neighbour, which the pick's IK now refuses.)
             log.debug("no motion: the %s state is in collision", name)
-            return None
+            return NoPath(f"the {name} is in collision")
     if si.checkMotion(start, goal):
         # The straight move is free: the shortest path, and no tree to grow.
         return og.PathGeometric(si, start, goal), False
@@ -117,17 +128,24 @@ def rough_path(
         time.perf_counter() - started,
         bool(solved),
     )
-    if not solved or not ss.haveExactSolutionPath():
-        return None
-    return ss.getSolutionPath(), True
+    if solved and ss.haveExactSolutionPath():
+        return ss.getSolutionPath(), True
+    if config.iterations is None:
+        return NoPath(f"no path in {config.timeout_s:g} s")
+    if timed_out:
+        return NoPath(
+            f"no path before the {config.timeout_s:g} s guard "
+            f"({checks - 1} of {config.iterations} iterations)"
+        )
+    return NoPath(f"no path in {config.iterations} iterations")
 
 
 def _solve(
     ss: og.SimpleSetup, start: ob.State, goal: ob.State, config: MotionConfig, seed: int | None
-) -> og.PathGeometric | None:
+) -> og.PathGeometric | NoPath:
     found = rough_path(ss, start, goal, config, seed)
-    if found is None:
-        return None
+    if isinstance(found, NoPath):
+        return found
     path, planned = found
     if planned:
         path = shorten(ss.getSpaceInformation(), path, config.shortcut_steps)
@@ -179,12 +197,13 @@ def plan_base_motion(
     bounds: tuple[float, float, float, float],
     config: MotionConfig = MotionConfig(),
     seed: int | None = None,
-) -> list[BaseConf] | None:
-    """A collision-free SE(2) path from start to goal inside (xmin, xmax, ymin, ymax)."""
+) -> list[BaseConf] | NoPath:
+    """A collision-free SE(2) path from start to goal inside (xmin, xmax, ymin, ymax), or why
+    there is none."""
     ss, s0, s1 = base_problem(start, goal, is_valid, bounds)
     path = _solve(ss, s0, s1, config, seed)
-    if path is None:
-        return None
+    if isinstance(path, NoPath):
+        return path
     return [(s.getX(), s.getY(), s.getYaw()) for s in path.getStates()]
 
 
@@ -222,8 +241,9 @@ def plan_joint_motion(
     upper: Sequence[float],
     config: MotionConfig = MotionConfig(),
     seed: int | None = None,
-) -> list[tuple[float, ...]] | None:
-    """A collision-free joint-space path; all joints bounded (wrap continuous ones first)."""
+) -> list[tuple[float, ...]] | NoPath:
+    """A collision-free joint-space path, or why there is none; all joints bounded (wrap
+    continuous ones first)."""
     n = len(start)
     if not len(goal) == len(lower) == len(upper) == n:
         raise ValueError("start, goal, lower and upper must have the same length")
@@ -240,6 +260,6 @@ def plan_joint_motion(
         s0[i], s1[i] = start[i], goal[i]
     ss.setStartAndGoalStates(s0, s1)
     path = _solve(ss, s0, s1, config, seed)
-    if path is None:
-        return None
+    if isinstance(path, NoPath):
+        return path
     return [tuple(s[i] for i in range(n)) for s in path.getStates()]

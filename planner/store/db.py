@@ -32,11 +32,13 @@ from sqlalchemy import (
     event,
     func,
     insert,
+    inspect,
     make_url,
     select,
+    text,
     update,
 )
-from sqlalchemy.exc import OperationalError
+from sqlalchemy.exc import DBAPIError, OperationalError
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 from sqlalchemy.pool import StaticPool
 
@@ -121,6 +123,7 @@ class QueryRow(Base):
     execution_s: Mapped[float]
     error: Mapped[str | None] = mapped_column(Text)
     context: Mapped[str] = mapped_column(Text, default="{}")  # JSON: facts and values seen
+    reason: Mapped[str | None] = mapped_column(Text)  # why a clean failure found nothing
 
 
 class BenchRow(Base):
@@ -213,6 +216,7 @@ class QueryRecord:
     execution_s: float
     error: str | None
     context: dict[str, Any]
+    reason: str | None = None
 
     @classmethod
     def from_row(cls, row: QueryRow) -> QueryRecord:
@@ -230,7 +234,20 @@ class QueryRecord:
             execution_s=row.execution_s,
             error=row.error,
             context=json.loads(row.context or "{}"),
+            reason=row.reason,
         )
+
+
+@dataclass(frozen=True)
+class QueryOutcome:
+    """How one stream query ended (``RunStore.query_outcomes``)."""
+
+    run_id: str
+    stream: str
+    success: bool
+    wall_s: float
+    reason: str | None
+    error: str | None
 
 
 @dataclass(frozen=True)
@@ -311,6 +328,34 @@ def _create_tables(engine: Engine, attempts: int = 10) -> None:
             time.sleep(0.05 * (attempt + 1))
 
 
+# Columns added after stores were first written, as (table, column, SQL type): a store from an
+# older version gets them (NULL in its old rows) when it is opened.
+_ADDED_COLUMNS = (("stream_queries", "reason", "TEXT"),)
+
+
+def _add_new_columns(engine: Engine, attempts: int = 10) -> None:
+    """Bring an older store's tables up to date. Processes opening it at once may race to add a
+    column; the loser finds it there."""
+    for table, column, sql_type in _ADDED_COLUMNS:
+        for attempt in range(attempts):
+            if column in {c["name"] for c in inspect(engine).get_columns(table)}:
+                break
+            try:
+                with engine.begin() as conn:
+                    conn.execute(text(f"ALTER TABLE {table} ADD COLUMN {column} {sql_type}"))
+                log.info(
+                    "run store: added column %s.%s to a store from an older version", table, column
+                )
+                break
+            except DBAPIError:
+                if attempt == attempts - 1:
+                    raise
+                log.debug(
+                    "run store: adding %s.%s raced another process; checking again", table, column
+                )
+                time.sleep(0.05 * (attempt + 1))
+
+
 class RunStore:
     """The record of every run. ``RunStore(path)`` opens (creating if needed) a SQLite file;
     a URL (``postgresql+psycopg://...``) opens any database SQLAlchemy speaks.
@@ -321,6 +366,7 @@ class RunStore:
     def __init__(self, url_or_path: str | Path | URL) -> None:
         self.engine = _engine_for(url_or_path)
         _create_tables(self.engine)
+        _add_new_columns(self.engine)
         log.debug("run store at %s", self.engine.url.render_as_string(hide_password=True))
 
     def __enter__(self) -> RunStore:
@@ -527,6 +573,25 @@ class RunStore:
         with Session(self.engine) as session:
             return [QueryRecord.from_row(r) for r in session.scalars(query)]
 
+    def query_outcomes(self, run_ids: list[str]) -> list[QueryOutcome]:
+        """How each stream query of some runs ended, without its inputs and context (cheap to
+        read for a whole benchmark), in the order stored."""
+        columns = (
+            QueryRow.run_id,
+            QueryRow.stream,
+            QueryRow.success,
+            QueryRow.wall_s,
+            QueryRow.reason,
+            QueryRow.error,
+        )
+        out: list[QueryOutcome] = []
+        with self.engine.connect() as conn:
+            for i in range(0, len(run_ids), 500):  # SQLite caps a statement's parameters
+                chunk = run_ids[i : i + 500]
+                query = select(*columns).where(QueryRow.run_id.in_(chunk)).order_by(QueryRow.id)
+                out.extend(QueryOutcome(*row) for row in conn.execute(query))
+        return out
+
     # benchmarks
 
     def create_bench(self, config: dict[str, Any]) -> str:
@@ -648,6 +713,7 @@ class RunStore:
                         "execution_s": e.execution_s,
                         "error": e.error,
                         "context": _dumps(e.context),
+                        "reason": e.reason,
                     }
                 )
         with self.engine.begin() as conn:

@@ -1,6 +1,13 @@
 """The stream runtime: Python samplers bound to declared streams, timed queries."""
 
-from planner.streams.adapters import StreamAdapter, StreamContext, from_fn, from_gen_fn, from_test
+from planner.streams.adapters import (
+    Failure,
+    StreamAdapter,
+    StreamContext,
+    from_fn,
+    from_gen_fn,
+    from_test,
+)
 from planner.streams.runtime import (
     BoundStream,
     QueryResult,
@@ -11,6 +18,7 @@ from planner.streams.runtime import (
 
 __all__ = [
     "BoundStream",
+    "Failure",
     "QueryResult",
     "StreamAdapter",
     "StreamBindingError",

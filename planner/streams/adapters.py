@@ -6,6 +6,9 @@ Three kinds, as in PDDLStream's ``from_fn``/``from_gen_fn``/``from_test``:
 - :func:`from_gen_fn`: ``gen_fn(*inputs) -> Iterator[tuple]``; every query takes the next item
   of one generator per input binding; an exhausted generator is a failed query.
 - :func:`from_test`: ``test(*inputs) -> bool``; a stream with no outputs.
+
+A sampler that finds nothing may return (or yield) :class:`Failure` instead of ``None`` to say
+why; the reason is recorded with the failed query.
 """
 
 from __future__ import annotations
@@ -18,6 +21,16 @@ from planner.pddl.structs import Atom
 
 AdapterKind = Literal["fn", "gen", "test"]
 Outputs = tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Failure:
+    """A sampler's "nothing found", with the reason (falsy, like the ``None`` it replaces)."""
+
+    reason: str
+
+    def __bool__(self) -> bool:
+        return False
 
 
 @dataclass(frozen=True)
@@ -54,13 +67,14 @@ class StreamAdapter:
 
     def next_outputs(
         self, inputs: tuple[Any, ...], key: Hashable, context: StreamContext | None = None
-    ) -> Outputs | None:
-        """One query: the outputs, or ``None`` for a failure. May raise (the runtime records it)."""
+    ) -> Outputs | Failure | None:
+        """One query: the outputs, or ``None`` / a :class:`Failure` for a failure. May raise
+        (the runtime records it)."""
         if self.kind == "test":
             return () if bool(self._call(inputs, context)) else None
         if self.kind == "fn":
             out = self._call(inputs, context)
-            return None if out is None else tuple(out)
+            return out if out is None or isinstance(out, Failure) else tuple(out)
         gen = self._generators.get(key)
         if gen is None:
             gen = iter(self._call(inputs, context))
@@ -68,16 +82,18 @@ class StreamAdapter:
         try:
             out = next(gen)
         except StopIteration:
-            return None
-        return None if out is None else tuple(out)
+            return Failure("the generator is exhausted")
+        return out if out is None or isinstance(out, Failure) else tuple(out)
 
     @property
     def callable_name(self) -> str:
         return getattr(self.fn, "__qualname__", repr(self.fn))
 
 
-def from_fn(fn: Callable[..., tuple[Any, ...] | None], *, context: bool = False) -> StreamAdapter:
-    """A function returning one output tuple, or ``None`` when it fails."""
+def from_fn(
+    fn: Callable[..., tuple[Any, ...] | Failure | None], *, context: bool = False
+) -> StreamAdapter:
+    """A function returning one output tuple, or ``None`` (or a :class:`Failure`) when it fails."""
     return StreamAdapter("fn", fn, uses_context=context)
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 from planner.pddl.structs import Stream, StreamSet
-from planner.streams.adapters import Outputs, StreamAdapter, StreamContext
+from planner.streams.adapters import Failure, Outputs, StreamAdapter, StreamContext
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +41,7 @@ class QueryResult:
     cpu_s: float
     error: str | None = None  # set when the sampler raised or returned a malformed result
     reused: bool = False  # the outputs of an identical earlier query; no sampler ran
+    reason: str | None = None  # why the sampler found nothing, when it said (a Failure)
 
     @property
     def execution_s(self) -> float:
@@ -124,11 +125,14 @@ class StreamRuntime:
             )
         t_wall, t_cpu = time.perf_counter(), time.process_time()
         error: str | None = None
+        reason: str | None = None
         outputs: Outputs | None
         try:
-            outputs = bound.adapter.next_outputs(
-                inputs, key if key is not None else inputs, context
-            )
+            answer = bound.adapter.next_outputs(inputs, key if key is not None else inputs, context)
+            if isinstance(answer, Failure):
+                outputs, reason = None, answer.reason
+            else:
+                outputs = answer
         except Exception as exc:  # a sampler's failure is data, not a crash
             outputs = None
             error = f"{type(exc).__name__}: {exc}"
@@ -141,4 +145,4 @@ class StreamRuntime:
             )
             log.warning(error)
             outputs = None
-        return QueryResult(name, outputs, wall, cpu, error)
+        return QueryResult(name, outputs, wall, cpu, error, reason=reason)

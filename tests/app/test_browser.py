@@ -201,9 +201,12 @@ def _viewer_body(request: Any) -> dict[str, Any] | None:
     return None
 
 
-def _click_node(page: Any, node: dict[str, Any], error: str | None = None) -> None:
+def _click_node(
+    page: Any, node: dict[str, Any], error: str | None = None, reason: str | None = None
+) -> None:
     """Zoom in on a node, click it on the canvas and check what the inspector shows: its
-    stream, outcome, seconds, and the query's error (a sampler that raised) if it had one."""
+    stream, outcome, seconds, the query's error (a sampler that raised) if it had one, and
+    why it found nothing if the sampler said."""
     page.click("#btn-last")
     page.click("#btn-fit")
     at = f"window.dashboard.nodePosition({node['node_id']})"
@@ -233,6 +236,11 @@ def _click_node(page: Any, node: dict[str, Any], error: str | None = None) -> No
         assert error in shown.inner_text()
     else:  # a query that just found nothing (IK out of reach) has no error to show
         assert not shown.is_visible()
+    why = inspector.locator('[data-testid="inspector-reason"]')
+    if reason:
+        assert why.inner_text() == reason
+    else:
+        assert not why.is_visible()
 
 
 def _check_charts(page: Any, run: dict[str, Any], events: list[dict[str, Any]]) -> None:
@@ -370,12 +378,12 @@ def test_kitchen_baseline_run_grows_live(page: Any, server: Server) -> None:
     queried = [n for n in nodes if n["stream"] is not None]
     failed = [n for n in queried if not n["success"]]
     clicked = failed[-1] if failed else queried[-1]
-    error = next(
-        e.get("error")
-        for e in events
-        if e["type"] == "stream_queried" and e["node_id"] == clicked["node_id"]
+    query = next(
+        e for e in events if e["type"] == "stream_queried" and e["node_id"] == clicked["node_id"]
     )
-    _click_node(page, clicked, error)
+    if not clicked["success"]:  # every kitchen sampler says why it found nothing
+        assert query["reason"], query
+    _click_node(page, clicked, query.get("error"), query.get("reason"))
     _check_charts(page, run, events)
 
     page.click("#btn-fit")

@@ -20,7 +20,7 @@ from planner.domains.kitchen.validate import validate_plan
 from planner.domains.kitchen.values import Conf, Grasp, Trajectory
 from planner.pddl import Atom
 from planner.search import BoundPlan, bind_sequentially
-from planner.streams import StreamContext
+from planner.streams import Failure, StreamContext
 
 pytestmark = pytest.mark.slow
 
@@ -86,7 +86,8 @@ def _stove_rate(samplers: KitchenSamplers, spots: list[tuple[float, float]], tri
     values = {f"p{i}": BlockPose(cx + x, cy + y, z, 0.0) for i, (x, y) in enumerate(spots)}
     context = StreamContext(frozenset(state), values)
     wins = sum(
-        samplers.sample_placement("b1", "stove", context=context) is not None for _ in range(trials)
+        isinstance(samplers.sample_placement("b1", "stove", context=context), tuple)
+        for _ in range(trials)
     )
     return wins / trials
 
@@ -121,7 +122,8 @@ def _stove_fills(scene: str, config: SamplerConfig, draws: int = 20) -> int:
             for i, block in enumerate(blocks):
                 context = StreamContext(frozenset(state), values)
                 out = samplers.sample_placement(block, "stove", context=context)
-                if out is None:
+                if isinstance(out, Failure):
+                    assert out.reason.startswith("no free place on stove in "), out.reason
                     break
                 values[f"p{i}"] = out[0]
                 state.add(Atom("at-pose", (block, f"p{i}")))
@@ -198,7 +200,10 @@ def test_ik_refuses_a_pick_that_lifts_the_block_next_to_its_neighbour() -> None:
         assert not samplers.world.robot_collides(clearance=SamplerConfig().clearance)
         assert not samplers._lifted_clear(picked, "b5", grasp)
         # No base pose helps: this grasp always lifts b5 towards b2.
-        assert samplers.inverse_kinematics("b5", poses["b5"], grasp, context=on_table) is None
+        # The failed query says so: the refusals, by cause, name the lifted block.
+        failed = samplers.inverse_kinematics("b5", poses["b5"], grasp, context=on_table)
+        assert isinstance(failed, Failure)
+        assert "lifted block within the clearance" in failed.reason, failed.reason
     finally:
         samplers.close()
 
@@ -214,6 +219,23 @@ def test_motion_queries_report_execution_seconds(
     assert result.success and result.execution_s == pytest.approx(result.outputs[0].seconds)
     grasp = runtime.query("sample-grasp", ("b1",))
     assert grasp.success and grasp.execution_s == 0.0
+
+
+def test_a_failed_motion_says_why(kitchen1: tuple[object, object, BoundPlan]) -> None:
+    """A motion whose goal stands the robot inside the table fails, and the failed query says
+    which part of the motion and why; a clean failure is not an error."""
+    loaded, problem, bound = kitchen1
+    runtime = loaded.runtime(problem, seed=5)  # type: ignore[attr-defined]
+    move = bound.skeleton.actions[0]
+    q1, q2 = bound.values[move.args[0]], bound.values[move.args[1]]
+    table = problem.values[GEOMETRY_KEY].platform("table")  # type: ignore[attr-defined]
+    into_table = runtime.query("plan-motion", (q1, replace(q2, base=(*table.center, 0.0))))
+    assert not into_table.success and into_table.error is None
+    assert into_table.reason == "base: the goal is in collision"
+    # Standing in the table at the block's grasp, the arm cannot even start back to rest.
+    out_of_table = runtime.query("plan-motion", (replace(q2, base=(*table.center, 0.0)), q1))
+    assert not out_of_table.success and out_of_table.error is None
+    assert out_of_table.reason == "arm to rest: the start is in collision"
 
 
 def _ik_travel(nearest: bool) -> tuple[list[float], int]:
@@ -237,7 +259,7 @@ def _ik_travel(nearest: bool) -> tuple[list[float], int]:
                     for grasp in _grasps(0.07, 0.1)[:2]:  # from above
                         pose = problem.values[f"p0-{block}"]
                         found = samplers.inverse_kinematics(block, pose, grasp, context=context)  # type: ignore[arg-type]
-                        if found is None:
+                        if isinstance(found, Failure):
                             failed += 1
                         else:
                             travel.append(_straight_base_s(here, found[0].base))

@@ -14,6 +14,7 @@ from ompl import geometric as og
 
 from planner.sim.motion import (
     MotionConfig,
+    NoPath,
     base_problem,
     plan_base_motion,
     plan_joint_motion,
@@ -39,7 +40,7 @@ def test_base_path_goes_around_the_wall() -> None:
     path = plan_base_motion(
         (-1.0, 0.0, 0.0), (1.0, 0.0, math.pi / 2), inflated_wall, bounds=(-2, 2, -2, 2)
     )
-    assert path is not None
+    assert isinstance(path, list)
     assert path[0] == pytest.approx((-1.0, 0.0, 0.0))
     assert path[-1] == pytest.approx((1.0, 0.0, math.pi / 2))
     # Straight segments between waypoints stay clear of the wall, checked densely.
@@ -58,15 +59,23 @@ def test_free_straight_move_is_one_segment() -> None:
     assert path == [pytest.approx((-1.0, 0.0, 0.0)), pytest.approx((1.0, 0.5, 0.3))]
 
 
-def test_blocked_goal_fails_within_its_time_limit() -> None:
-    def closed(c: tuple[float, float, float]) -> bool:
-        return abs(c[0]) > 0.3
+def closed(c: tuple[float, float, float]) -> bool:
+    return abs(c[0]) > 0.3
 
-    config = MotionConfig(timeout_s=0.3)
-    assert (
-        plan_base_motion((-1, 0, 0), (1, 0, 0), closed, bounds=(-2, 2, -2, 2), config=config)
-        is None
-    )
+
+@pytest.mark.parametrize(
+    ("config", "reason"),
+    [
+        (MotionConfig(iterations=20), "no path in 20 iterations"),
+        (MotionConfig(iterations=None, timeout_s=0.3), "no path in 0.3 s"),
+    ],
+)
+def test_a_blocked_goal_fails_within_its_limit_and_says_which(
+    config: MotionConfig, reason: str
+) -> None:
+    got = plan_base_motion((-1, 0, 0), (1, 0, 0), closed, bounds=(-2, 2, -2, 2), config=config)
+    assert got == NoPath(reason)
+    assert not got  # falsy, in place of a path
 
 
 def _through_a_gap(slow_s: float) -> list[tuple[float, float, float]] | None:
@@ -92,7 +101,7 @@ def test_a_motion_does_not_depend_on_the_machines_speed() -> None:
     with ProcessPoolExecutor(1, mp_context=spawn, max_tasks_per_child=1) as pool:
         fast = pool.submit(_through_a_gap, 0.0).result()
         slow = pool.submit(_through_a_gap, 0.004).result()
-    assert fast is not None
+    assert isinstance(fast, list)
     assert slow == fast
 
 
@@ -107,7 +116,9 @@ def test_a_colliding_end_fails_at_once_and_quietly(
 ) -> None:
     inside = (0.0, 0.0, 0.0)  # in the wall
     start, goal = ((-1.0, 0.0, 0.0), inside) if end == "goal" else (inside, (1.0, 0.0, 0.0))
-    assert plan_base_motion(start, goal, wall, bounds=(-2, 2, -2, 2)) is None
+    assert plan_base_motion(start, goal, wall, bounds=(-2, 2, -2, 2)) == NoPath(
+        f"the {end} is in collision"
+    )
     # The failed query is the planner's answer; OMPL's own error lines never reach the console.
     assert capfd.readouterr().err == ""
 
@@ -117,7 +128,7 @@ def test_joint_path_respects_bounds_and_obstacle() -> None:
         return not (0.4 < q[0] < 0.6 and q[1] < 0.9)
 
     path = plan_joint_motion((0.0, 0.0), (1.0, 0.0), valid, lower=(-1, -1), upper=(2, 2))
-    assert path is not None and path[-1] == pytest.approx((1.0, 0.0))
+    assert isinstance(path, list) and path[-1] == pytest.approx((1.0, 0.0))
     assert all(-1 <= v <= 2 for q in path for v in q)
     assert any(q[1] >= 0.9 for q in path)  # it went over the obstacle
 

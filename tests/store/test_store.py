@@ -354,3 +354,40 @@ def test_many_openers_of_a_new_store_at_once_all_get_it(tmp_path: Path) -> None:
         assert not _open_at_once(path, 4)
         with RunStore(path) as store:
             assert store.count_runs() == 4
+
+
+def _one_failed_query(store: RunStore, reason: str | None) -> str:
+    run_id = store.create_run("line-2", 3, "baseline", CONFIG)
+    sink = StoreSink(store, run_id, flush_interval_s=None)
+    emitter = Emitter(run_id, sink)
+    emitter.emit(RunStarted, scene="line-2", seed=3, planner="baseline", config=CONFIG)
+    emitter.emit(
+        StreamQueried,
+        node_id=1,
+        stream="sample-pose",
+        input_names=["?b", "?r"],
+        inputs=["b0", [0.0, 1.0]],
+        success=False,
+        wall_s=0.5,
+        cpu_s=0.5,
+        execution_s=0.0,
+        error=None,
+        reason=reason,
+    )
+    sink.close()
+    return run_id
+
+
+def test_a_store_from_before_failure_reasons_opens_and_records_them(db: Path) -> None:
+    with RunStore(db) as store:
+        old = _one_failed_query(store, None)
+    with sqlite3.connect(db) as conn:  # the table as an older version wrote it
+        conn.execute("ALTER TABLE stream_queries DROP COLUMN reason")
+    with RunStore(db) as store:
+        (before,) = store.stream_queries(run_ids=[old])
+        assert not before.success and before.reason is None
+        new = _one_failed_query(store, "no path in 150 iterations")
+        (row,) = store.stream_queries(run_ids=[new])
+        assert row.reason == "no path in 150 iterations"
+        (event,) = [e for e in store.events(new) if isinstance(e, StreamQueried)]
+        assert event.reason == row.reason

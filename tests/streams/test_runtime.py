@@ -8,7 +8,14 @@ import pytest
 
 from planner.domains import LoadedDomain
 from planner.pddl import Problem
-from planner.streams import StreamBindingError, bind_streams, from_fn, from_gen_fn, from_test
+from planner.streams import (
+    Failure,
+    StreamBindingError,
+    bind_streams,
+    from_fn,
+    from_gen_fn,
+    from_test,
+)
 
 
 def test_missing_binding_names_stream_and_file(line: LoadedDomain) -> None:
@@ -42,8 +49,9 @@ def test_generator_is_one_per_input_binding_and_exhausts(line: LoadedDomain) -> 
     rt = bind_streams(
         line.streams, {"sample-pose": from_gen_fn(gen), "test-reachable": from_test(bool)}
     )
-    first = [rt.query("sample-pose", (1.0, (0.0, 5.0))).outputs for _ in range(3)]
-    assert first == [(0.0,), (5.0,), None]
+    first = [rt.query("sample-pose", (1.0, (0.0, 5.0))) for _ in range(3)]
+    assert [r.outputs for r in first] == [(0.0,), (5.0,), None]
+    assert first[2].reason == "the generator is exhausted" and first[2].error is None
     other = rt.query("sample-pose", (1.0, (2.0, 3.0)))
     assert other.outputs == (2.0,)
 
@@ -83,3 +91,18 @@ def test_line_samplers_respect_the_scene(line: LoadedDomain, line_problem: Probl
     same = line.runtime(line_problem, seed=3).query("sample-pose", (0.5, (1.0, 4.0)))
     again = line.runtime(line_problem, seed=3).query("sample-pose", (0.5, (1.0, 4.0)))
     assert same.outputs == again.outputs  # seeded
+
+
+def test_a_sampler_may_say_why_it_found_nothing(line: LoadedDomain) -> None:
+    def picky(width: float, region: tuple[float, float]) -> tuple[float] | Failure:
+        lo, hi = region
+        return (lo,) if hi - lo >= width else Failure(f"region {hi - lo:g} wide, needs {width:g}")
+
+    rt = bind_streams(
+        line.streams, {"sample-pose": from_fn(picky), "test-reachable": from_test(bool)}
+    )
+    failed = rt.query("sample-pose", (2.0, (0.0, 1.5)))
+    assert not failed.success and failed.outputs is None
+    assert failed.reason == "region 1.5 wide, needs 2" and failed.error is None
+    fine = rt.query("sample-pose", (1.0, (0.0, 1.5)))
+    assert fine.outputs == (0.0,) and fine.reason is None

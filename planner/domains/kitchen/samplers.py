@@ -11,6 +11,7 @@ import itertools
 import logging
 import math
 import random
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,7 +22,13 @@ from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Traje
 from planner.domains.kitchen.world import KitchenWorld, block_pose_to_pose
 from planner.pddl.structs import Problem
 from planner.sim.ik import arm_ik
-from planner.sim.motion import MotionConfig, plan_base_motion, plan_joint_motion, seed_ompl
+from planner.sim.motion import (
+    MotionConfig,
+    NoPath,
+    plan_base_motion,
+    plan_joint_motion,
+    seed_ompl,
+)
 from planner.sim.pr2_model import (
     ARM_JOINTS,
     BASE_VELOCITY,
@@ -30,7 +37,7 @@ from planner.sim.pr2_model import (
     VELOCITY_LIMITS,
 )
 from planner.sim.transforms import invert, multiply, quat_from_euler, wrap_angle
-from planner.streams.adapters import StreamAdapter, StreamContext, from_fn
+from planner.streams.adapters import Failure, StreamAdapter, StreamContext, from_fn
 
 log = logging.getLogger(__name__)
 
@@ -192,13 +199,13 @@ class KitchenSamplers:
 
     def sample_placement(
         self, block: str, platform: str, *, context: StreamContext | None = None
-    ) -> tuple[BlockPose] | None:
+    ) -> tuple[BlockPose] | Failure:
         self._apply(context)
         plat = self.geometry.platform(platform)
         size = self.geometry.block(block).size
         xmin, xmax, ymin, ymax = plat.footprint()
         if xmax - xmin < size or ymax - ymin < size:
-            return None
+            return Failure(f"{block} is larger than {platform}")
         poses = dict(self.world._placed)
         cfg = self.config
         for _ in range(cfg.placement_attempts):
@@ -226,11 +233,11 @@ class KitchenSamplers:
             self.world.set_blocks(poses)
             if not self.world.block_collides(block, margin=self.config.placement_gap):
                 return (pose,)
-        return None
+        return Failure(f"no free place on {platform} in {cfg.placement_attempts} tries")
 
     def inverse_kinematics(
         self, block: str, pose: BlockPose, grasp: Grasp, *, context: StreamContext | None = None
-    ) -> tuple[Conf] | None:
+    ) -> tuple[Conf] | Failure:
         self._apply(context)
         world = self.world
         placing = world.held is not None and world.held[0] == block
@@ -244,33 +251,49 @@ class KitchenSamplers:
         torso = self.geometry.robot.torso
         # Picking, the gripper closes around the block; placing, the block rides in it.
         touching = () if placing else (block,)
-        for base in self._base_candidates(pose, _standing_at(context)):
+        bases = self._base_candidates(pose, _standing_at(context))
+        if not bases:
+            return Failure("no base pose within reach and clear of the fixtures")
+        rejected: Counter[str] = Counter()  # why each base pose or IK solution was refused
+        for base in bases:
             world.hold(None)
             if placing:
                 world.hold(block, grasp)
             base_pose = ((base[0], base[1], 0.0), quat_from_euler(0.0, 0.0, base[2]))
             tool = multiply(invert(base_pose), tool_world)
             pre = multiply(invert(base_pose), pre_world)
-            for arm in arm_ik(self.arm, tool[0], tool[1], torso=torso)[:4]:
+            solutions = arm_ik(self.arm, tool[0], tool[1], torso=torso)[:4]
+            if not solutions:
+                rejected["out of the arm's reach"] += 1
+            for arm in solutions:
                 conf = Conf(base, torso, arm)
                 world.set_conf(conf)
                 if world.robot_collides(ignore=touching):
+                    rejected["grasp in collision"] += 1
                     continue
                 approach = arm_ik(self.arm, pre[0], pre[1], torso=torso, nearest_to=arm)
-                if not approach or not self._straight_ok(base, torso, approach[0], arm, touching):
+                if not approach:
+                    rejected["no approach solution"] += 1
+                    continue
+                if not self._straight_ok(base, torso, approach[0], arm, touching):
+                    rejected["approach blocked"] += 1
                     continue
                 out = approach[0]
                 if not placing and not self._retreat_ok(base, torso, out, arm, block, grasp):
+                    rejected["retreat sweeps a block"] += 1
                     continue
                 conf = Conf(base, torso, arm, approach[0])
                 world.set_conf(conf, approach=True)
                 # Motion planning starts and ends here, so it must keep the same clearance.
                 if world.robot_collides(clearance=self.config.clearance):
+                    rejected["approach within the clearance"] += 1
                     continue
                 if not placing and not self._lifted_clear(conf, block, grasp):
+                    rejected["lifted block within the clearance"] += 1
                     continue
                 return (conf,)
-        return None
+        why = ", ".join(f"{cause} {n}" for cause, n in sorted(rejected.items()))
+        return Failure(f"no arm configuration from {len(bases)} base poses ({why})")
 
     def _straight_ok(
         self,
@@ -361,7 +384,7 @@ class KitchenSamplers:
 
     def plan_motion(
         self, q1: Conf, q2: Conf, *, context: StreamContext | None = None
-    ) -> tuple[Trajectory] | None:
+    ) -> tuple[Trajectory] | Failure:
         self._apply(context)
         world = self.world
         joints = ARM_JOINTS[self.arm]
@@ -376,9 +399,10 @@ class KitchenSamplers:
 
             return valid
 
-        def arm_path(base: BaseConf, a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+        def arm_path(base: BaseConf, a: tuple[float, ...], b: tuple[float, ...]) -> NoPath | None:
+            """Plans the arm's move (appending it); why there is none, else None."""
             if max(abs(x - y) for x, y in zip(a, b, strict=True)) < 1e-6:
-                return True
+                return None
             path = plan_joint_motion(
                 a,
                 b,
@@ -387,10 +411,10 @@ class KitchenSamplers:
                 upper=self.upper,
                 config=self.config.arm_motion,
             )
-            if path is None:
-                return False
+            if isinstance(path, NoPath):
+                return path
             segments.append(Segment("arm", (base,), tuple(path), _arm_duration(path, joints)))
-            return True
+            return None
 
         start_arm = q1.approach_arm if q1.approach_arm is not None else q1.arm
         if q1.approach_arm is not None:  # retreat straight back from the grasp
@@ -398,8 +422,8 @@ class KitchenSamplers:
             segments.append(
                 Segment("arm", (q1.base,), tuple(straight), _arm_duration(straight, joints))
             )
-        if not arm_path(q1.base, start_arm, self.rest):
-            return None
+        if (failed := arm_path(q1.base, start_arm, self.rest)) is not None:
+            return Failure(f"arm to rest: {failed.reason}")
         if math.dist(q1.base[:2], q2.base[:2]) > 1e-6 or abs(wrap_angle(q1.base[2] - q2.base[2])):
 
             def base_valid(base: BaseConf) -> bool:
@@ -407,12 +431,12 @@ class KitchenSamplers:
                 return not world.robot_collides(clearance=self.config.clearance)
 
             path = plan_base_motion(q1.base, q2.base, base_valid, bounds=self.bounds, config=cfg)
-            if path is None:
-                return None
+            if isinstance(path, NoPath):
+                return Failure(f"base: {path.reason}")
             segments.append(Segment("base", tuple(path), (self.rest,), _base_duration(path)))
         end_arm = q2.approach_arm if q2.approach_arm is not None else q2.arm
-        if not arm_path(q2.base, self.rest, end_arm):
-            return None
+        if (failed := arm_path(q2.base, self.rest, end_arm)) is not None:
+            return Failure(f"arm from rest: {failed.reason}")
         if q2.approach_arm is not None:  # final straight move onto the grasp
             straight = [q2.approach_arm, q2.arm]
             segments.append(

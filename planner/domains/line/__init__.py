@@ -14,7 +14,7 @@ from typing import Any
 from planner.domains import DomainSpec
 from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
 from planner.scene import Scene, check_name, goal_atoms
-from planner.streams.adapters import StreamAdapter, from_fn, from_test
+from planner.streams.adapters import Failure, StreamAdapter, from_fn, from_test
 
 REACH_KEY = "__reach__"  # where a problem keeps the gripper's reach among its values
 
@@ -83,10 +83,10 @@ def bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter
     """Samplers on plain floats: a uniform position in a region, and a reach test."""
     reach = float(problem.values.get(REACH_KEY, float("inf")))  # type: ignore[arg-type]
 
-    def sample_pose(width: float, region: tuple[float, float]) -> tuple[float] | None:
+    def sample_pose(width: float, region: tuple[float, float]) -> tuple[float] | Failure:
         lo, hi = region
         if hi - lo < width:
-            return None
+            return Failure(f"the region is {hi - lo:g} wide, the block {width:g}")
         return (rng.uniform(lo + width / 2, hi - width / 2),)
 
     def reachable(width: float, x: float) -> bool:
