@@ -55,13 +55,14 @@ def _improvement(
 
 
 def failure_kind(q: QueryOutcome) -> str:
-    """A failed query's reason without its particulars (counts, the bracketed breakdown), so
-    that failures of one kind count together: "base: no path in N iterations"."""
+    """A failed query's reason without its numbers, so that failures of one kind count
+    together: "base: no path in N iterations"; a breakdown's counts go ("no arm configuration
+    from N base poses (grasp in collision, out of the arm's reach)")."""
     if q.error is not None:
         return f"error: {q.error.split(':', 1)[0]}"
     if not q.reason:
         return "no reason given"
-    kind = re.sub(r"\s*\(.*\)\s*$", "", q.reason)
+    kind = re.sub(r" \d+(?=[,)])", "", q.reason)  # "cause 12," -> "cause,"
     return re.sub(r"\d+(\.\d+)?", "N", kind)
 
 

@@ -248,19 +248,22 @@ def test_failures_count_together_by_kind_most_first() -> None:
         failed(
             "inverse-kinematics", "no arm configuration from 4 base poses (grasp in collision 2)"
         ),
+        failed("plan-motion", "base: no path before the 10 s guard (87 of 150 iterations)"),
         failed("sample-pose", None, "RuntimeError: IK diverged"),
         failed("sample-pose", None),
     ]
     assert failure_kind(outcomes[0]) == "base: no path in N iterations"
     summary = query_summary(outcomes)
     motion = summary["plan-motion"]
-    assert (motion["queries"], motion["failed"], motion["failed_s"]) == (4, 3, 3.0)
+    assert (motion["queries"], motion["failed"], motion["failed_s"]) == (5, 4, 4.0)
     assert [(k["kind"], k["count"]) for k in motion["kinds"]] == [
         ("base: no path in N iterations", 2),
         ("arm to rest: the start is in collision", 1),
+        ("base: no path before the N s guard (N of N iterations)", 1),
     ]
-    assert summary["inverse-kinematics"]["kinds"] == [
-        {"kind": "no arm configuration from N base poses", "count": 2, "seconds": 2.0}
+    assert [(k["kind"], k["count"]) for k in summary["inverse-kinematics"]["kinds"]] == [
+        ("no arm configuration from N base poses (approach blocked)", 1),
+        ("no arm configuration from N base poses (grasp in collision)", 1),
     ]
     assert [k["kind"] for k in summary["sample-pose"]["kinds"]] == [
         "error: RuntimeError",
