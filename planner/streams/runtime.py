@@ -130,7 +130,7 @@ class StreamRuntime:
         try:
             answer = bound.adapter.next_outputs(inputs, key if key is not None else inputs, context)
             if isinstance(answer, Failure):
-                outputs, reason = None, answer.reason
+                outputs, reason = None, str(answer.reason)  # stored as text, whatever it was
             else:
                 outputs = answer
         except Exception as exc:  # a sampler's failure is data, not a crash

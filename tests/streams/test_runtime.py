@@ -106,3 +106,9 @@ def test_a_sampler_may_say_why_it_found_nothing(line: LoadedDomain) -> None:
     assert failed.reason == "region 1.5 wide, needs 2" and failed.error is None
     fine = rt.query("sample-pose", (1.0, (0.0, 1.5)))
     assert fine.outputs == (0.0,) and fine.reason is None
+    # A reason that is not text is stored as its text, not refused later by the event.
+    odd = bind_streams(
+        line.streams,
+        {"sample-pose": from_fn(lambda w, r: Failure(42)), "test-reachable": from_test(bool)},  # type: ignore[arg-type]
+    ).query("sample-pose", (1.0, (0.0, 1.5)))
+    assert odd.reason == "42" and not odd.success
