@@ -44,7 +44,10 @@ def pool(specs: list[str]) -> dict[str, dict[str, Any]]:
             raise ValueError(f"{spec!r}: expected BENCH_ID@DB")
         if not Path(db).exists():
             raise ValueError(f"{spec!r}: no such store {db}")
-        s = summarize(db, bench_id)
+        try:
+            s = summarize(db, bench_id)
+        except KeyError as err:
+            raise ValueError(f"{spec}: {err.args[0]}") from None
         scene, planners = s["config"]["scene"], list(s["config"]["planners"])
         entry = scenes.setdefault(
             scene, {"planners": planners, "benches": [], "budgets": set(), "rows": {}}
@@ -58,6 +61,9 @@ def pool(specs: list[str]) -> dict[str, dict[str, Any]]:
                 raise ValueError(f"{spec}: seed {row['seed']} of {scene} is in two benchmarks")
             if all(row[p]["status"] is not None for p in planners):  # skip unfinished seeds
                 entry["rows"][row["seed"]] = row
+    for scene, entry in scenes.items():
+        if not entry["rows"]:
+            raise ValueError(f"{scene}: no seed that every planner has finished")
     return scenes
 
 
@@ -153,8 +159,8 @@ def main() -> int:
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    rng = np.random.default_rng(0)
-    results = {s: analyse(scenes[s], rng) for s in order}
+    # A fresh generator per scene: a scene's intervals do not depend on the other arguments.
+    results = {s: analyse(scenes[s], np.random.default_rng(0)) for s in order}
     print(
         "| scene | seeds | solved (reference / ours) | mean total s (reference / ours) "
         "| total | planning | execution (both solved) | zero-planning bound | benchmarks (code) |"

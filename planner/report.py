@@ -26,7 +26,7 @@ BOOTSTRAP = 5000  # resamples for the intervals
 MEASURES = ("planning", "execution", "total")
 
 
-def trial_times(t: BenchTrialRecord, budget: float) -> dict[str, float]:
+def _times(t: BenchTrialRecord, budget: float) -> dict[str, float]:
     if t.status == "solved" and t.planning_s is not None:
         execution = t.execution_s or 0.0
         return {"planning": t.planning_s, "execution": execution, "total": t.planning_s + execution}
@@ -106,7 +106,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
     for p in planners:
         ts = list(by[p].values())
         solved = [t for t in ts if t.status == "solved"]
-        times = [trial_times(t, budget) for t in solved]
+        times = [_times(t, budget) for t in solved]
         ratios = [
             t.planning_s / t.oracle_s for t in solved if t.planning_s is not None and t.oracle_s
         ]
@@ -117,7 +117,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             "failed": sum(1 for t in ts if t.status == "failed"),
             "invalid_plans": sum(1 for t in ts if t.valid is False),
             **{f"{m}_s": _stats([x[m] for x in times]) for m in MEASURES},  # over solved trials
-            "total_s_censored": _stats([trial_times(t, budget)["total"] for t in ts]),
+            "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),
             "planning_over_oracle": _stats(ratios),
             "queries": query_summary(q for q in outcomes if planner_of.get(q.run_id) == p),
         }
@@ -134,13 +134,13 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             # An unsolved trial has no execution to compare: execution is over both-solved seeds.
             pool = both if m == "execution" else seeds
             entry[f"{m}_censored"] = paired_improvement(
-                [trial_times(by[p][s], budget)[m] for s in pool],
-                [trial_times(by[reference][s], budget)[m] for s in pool],
+                [_times(by[p][s], budget)[m] for s in pool],
+                [_times(by[reference][s], budget)[m] for s in pool],
                 rng,
             )
             entry[f"{m}_both_solved"] = paired_improvement(
-                [trial_times(by[p][s], budget)[m] for s in both],
-                [trial_times(by[reference][s], budget)[m] for s in both],
+                [_times(by[p][s], budget)[m] for s in both],
+                [_times(by[reference][s], budget)[m] for s in both],
                 rng,
             )
         paired[p] = entry
@@ -150,7 +150,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             **{
                 p: {
                     "status": by[p][s].status if s in by[p] else None,
-                    **(trial_times(by[p][s], budget) if s in by[p] else {}),
+                    **(_times(by[p][s], budget) if s in by[p] else {}),
                     "run_id": by[p][s].run_id if s in by[p] else None,
                     "error": by[p][s].error if s in by[p] else None,
                 }
