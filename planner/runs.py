@@ -231,7 +231,13 @@ def _run(
             predictor = _load_predictor(config, loaded)
         if predictor is not None and config.stream_order == "model":
             plans, states = _model_order(
-                predictor, plans, states, initial, fluents, loaded.static_context(problem)
+                predictor,
+                plans,
+                states,
+                initial,
+                fluents,
+                loaded.static_context(problem),
+                {s: frozenset(f) for s, f in loaded.spec.unread.items()},
             )
     emitter.emit(AbstractPlansFound, plans=plan_summaries(plans), seconds=abstract.seconds["total"])
     runtime = loaded.runtime(problem, seed=config.seed)
@@ -302,6 +308,7 @@ def _model_order(
     initial: dict[str, Any],
     fluents: frozenset[str],
     static_context: Mapping[str, Any],
+    unread: Mapping[str, frozenset[str]],
 ) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]]]:
     """Every stream plan reordered by the model's predictions before anything is bound
     (:mod:`planner.search.order`), in one batch."""
@@ -323,7 +330,7 @@ def _model_order(
     out_states: list[list[frozenset[Atom]]] = []
     for plan, plan_states, (lo, hi) in zip(plans, states, spans, strict=True):
         scores = [seconds_per_failure(c) for c in costs[lo:hi]]
-        ordered, ordered_states = order_streams(plan, plan_states, fluents, scores)
+        ordered, ordered_states = order_streams(plan, plan_states, fluents, scores, unread)
         out_plans.append(ordered)
         out_states.append(ordered_states)
     return tuple(out_plans), out_states

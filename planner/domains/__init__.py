@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import random
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +35,9 @@ class DomainSpec:
     # Fluents that do not change a stream's outcome: left out when the learned search pools the
     # outcomes of the same query made from different nodes (see LearnedPolicy).
     evidence_ignore: tuple[str, ...] = ()
+    # Per stream, fluents of its context its sampler never reads: the model's stream order
+    # (planner/search/order.py) need not bind the objects they name first.
+    unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     # What every query's context carries besides its state (JSON; the kitchen: the footprints of
     # its platforms and the sizes of its blocks, which a learned model needs to tell how much
     # room a platform has left). Recorded with each query and given to the learned models.

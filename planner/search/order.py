@@ -7,8 +7,9 @@ test fails (the fourth block finds no room on the stove) everything bound after 
 blame is thrown away with it.
 
 :func:`order_streams` moves each stream as early as what it reads allows: its inputs, and the
-optimistic objects in the fluent facts of its context (a placement sees where the earlier
-blocks stand, so it comes after their placements). Among the streams that could go next it
+optimistic objects in the fluent facts of its context that its sampler reads (a placement sees
+where the earlier blocks stand, so it comes after their placements; it does not read where the
+robot stands, so it need not wait for the IK before it). Among the streams that could go next it
 takes the one with the least expected seconds per failure (:func:`seconds_per_failure`): the
 classic rule for ordering independent tests (Simon & Kadane), here with the learned models'
 predictions. In the kitchen that binds every grasp, placement and IK (milliseconds) before the
@@ -18,7 +19,7 @@ first motion, so a crowded stove is found and re-sampled before any motion is pl
 from __future__ import annotations
 
 import heapq
-from collections.abc import Sequence
+from collections.abc import Collection, Mapping, Sequence
 
 from planner.abstract.skeleton import AbstractPlan
 from planner.pddl.structs import Atom
@@ -36,10 +37,15 @@ def seconds_per_failure(cost: StreamCost) -> float:
 
 
 def dependencies(
-    plan: AbstractPlan, states: Sequence[frozenset[Atom]], fluents: frozenset[str]
+    plan: AbstractPlan,
+    states: Sequence[frozenset[Atom]],
+    fluents: frozenset[str],
+    unread: Mapping[str, Collection[str]] | None = None,
 ) -> list[set[int]]:
     """Per stream, the streams that must be bound before it: those producing its inputs or an
-    object of its context's fluent facts."""
+    object of its context's fluent facts, except the facts of the fluents ``unread`` names for
+    that stream (its sampler never reads them)."""
+    unread = unread or {}
     if len(states) != len(plan.stream_plan):
         raise ValueError(
             f"one context per stream is needed: {len(states)} for {len(plan.stream_plan)}"
@@ -48,7 +54,13 @@ def dependencies(
     deps: list[set[int]] = []
     for i, inst in enumerate(plan.stream_plan):
         read = set(inst.inputs)
-        read.update(x for a in states[i] if a.predicate in fluents for x in a.args)
+        skip = unread.get(inst.stream, ())
+        read.update(
+            x
+            for a in states[i]
+            if a.predicate in fluents and a.predicate not in skip
+            for x in a.args
+        )
         mine = {producer[o] for o in read if o in producer} - {i}
         if any(j > i for j in mine):
             raise ValueError(
@@ -64,15 +76,17 @@ def order_streams(
     states: Sequence[frozenset[Atom]],
     fluents: frozenset[str],
     scores: Sequence[float],
+    unread: Mapping[str, Collection[str]] | None = None,
 ) -> tuple[AbstractPlan, list[frozenset[Atom]]]:
     """``plan`` with its streams reordered (and ``states``, the context of each stream, to
     match): at each step the stream with the lowest score among those whose dependencies are
-    bound, ties in the plan's own order. Scores are usually :func:`seconds_per_failure`."""
+    bound (:func:`dependencies`), ties in the plan's own order. Scores are usually
+    :func:`seconds_per_failure`."""
     if len(scores) != len(plan.stream_plan):
         raise ValueError(
             f"one score per stream is needed: {len(scores)} for a plan of {len(plan.stream_plan)}"
         )
-    deps = dependencies(plan, states, fluents)
+    deps = dependencies(plan, states, fluents, unread)
     waiting = [len(d) for d in deps]
     users: list[list[int]] = [[] for _ in deps]
     for i, d in enumerate(deps):

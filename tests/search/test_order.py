@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Collection, Mapping
 from dataclasses import replace
 
 import pytest
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.abstract.skeleton import AbstractPlan
-from planner.domains import problem_for_scene
-from planner.pddl.structs import Atom
+from planner.domains import LoadedDomain, problem_for_scene
+from planner.pddl.structs import Atom, Problem
 from planner.runs import DEFAULT_MODEL, RunConfig, _model_order
 from planner.search.binding import stream_contexts
 from planner.search.learned import StreamCost
@@ -28,7 +29,12 @@ FLUENTS = _fluents()
 
 def kitchen(
     scene: str = "kitchen-2", k: int = 3
-) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]], dict[str, object], object]:
+) -> tuple[
+    tuple[AbstractPlan, ...],
+    list[list[frozenset[Atom]]],
+    dict[str, object],
+    tuple[LoadedDomain, Problem],
+]:
     loaded, problem = problem_for_scene(scene, seed=0)
     plans = plan_abstract(
         loaded.domain,
@@ -42,12 +48,19 @@ def kitchen(
     return plans, states, initial, (loaded, problem)
 
 
-def check_binding_order(plan: AbstractPlan, states: list[frozenset[Atom]]) -> None:
-    """Every stream's inputs and context objects are made before it."""
+def check_binding_order(
+    plan: AbstractPlan,
+    states: list[frozenset[Atom]],
+    unread: Mapping[str, Collection[str]] | None = None,
+) -> None:
+    """Every stream's inputs and the context objects its sampler reads are made before it."""
     made: set[str] = set()
     produced = set(plan.optimistic_objects)
     for inst, state in zip(plan.stream_plan, states, strict=True):
-        read = set(inst.inputs) | {x for a in state if a.predicate in FLUENTS for x in a.args}
+        skip = (unread or {}).get(inst.stream, ())
+        read = set(inst.inputs) | {
+            x for a in state if a.predicate in FLUENTS and a.predicate not in skip for x in a.args
+        }
         missing = (read & produced) - made
         assert not missing, f"{inst} reads {missing} before they are bound"
         made.update(inst.outputs)
@@ -106,18 +119,40 @@ def test_cheap_and_doubtful_before_dear_and_sure() -> None:
 
 
 def test_the_shipped_model_orders_kitchen_4_tests_before_motions() -> None:
+    """Motions last; and the placements on the stove come one after another, before the IK
+    that stands between them in the plan (a placement does not read where the robot stands),
+    so a stove left with no room is blamed on placements alone (kitchen-6 seed 1014: with an
+    IK, a grasp and a sink placement between each two stove placements, the search spent
+    300 s re-sampling those instead of the stove)."""
     from planner.learning.predictor import ModelPredictor
 
     plans, states, initial, (loaded, problem) = kitchen("kitchen-4", k=2)
     predictor = ModelPredictor.load(DEFAULT_MODEL, domain="kitchen")
+    unread = {s: frozenset(f) for s, f in loaded.spec.unread.items()}
     ordered, ordered_states = _model_order(
-        predictor, plans, states, initial, FLUENTS, loaded.static_context(problem)
+        predictor,
+        plans,
+        states,
+        initial,
+        FLUENTS,
+        loaded.static_context(problem),
+        unread,
     )
     for plan, plan_states in zip(ordered, ordered_states, strict=True):
         kinds = [s.stream for s in plan.stream_plan]
         first_motion = kinds.index("plan-motion")
         assert set(kinds[first_motion:]) == {"plan-motion"}
-        check_binding_order(plan, plan_states)
+        check_binding_order(plan, plan_states, unread)
+        stove = [
+            i
+            for i, s in enumerate(plan.stream_plan)
+            if s.stream == "sample-placement" and s.inputs[1] == "stove"
+        ]
+        assert len(stove) == 4
+        between = {plan.stream_plan[i].stream for i in range(stove[0], stove[-1])}
+        assert "inverse-kinematics" not in between, kinds
+    with pytest.raises(AssertionError, match="before they are bound"):
+        check_binding_order(ordered[0], ordered_states[0])  # the IK's standing is not bound
 
 
 def test_contexts_out_of_binding_order_are_refused() -> None:
