@@ -11,7 +11,7 @@ import logging
 import time
 import uuid
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -237,7 +237,7 @@ def _run(
                 initial,
                 fluents,
                 loaded.static_context(problem),
-                {s: frozenset(f) for s, f in loaded.spec.unread.items()},
+                loaded.spec.unread,
             )
     emitter.emit(AbstractPlansFound, plans=plan_summaries(plans), seconds=abstract.seconds["total"])
     runtime = loaded.runtime(problem, seed=config.seed)
@@ -308,7 +308,7 @@ def _model_order(
     initial: dict[str, Any],
     fluents: frozenset[str],
     static_context: Mapping[str, Any],
-    unread: Mapping[str, frozenset[str]],
+    unread: Mapping[str, Collection[str]],
 ) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]]]:
     """Every stream plan reordered by the model's predictions before anything is bound
     (:mod:`planner.search.order`), in one batch."""

@@ -98,6 +98,12 @@ def get_domain(name: str) -> LoadedDomain:
     spec = specs[name]
     domain = load_domain(spec.directory / "domain.pddl")
     streams = load_streams(spec.directory / "stream.pddl", domain)
+    known = {s.name for s in streams.streams}
+    unknown = sorted(set(spec.unread) - known)
+    if unknown:
+        raise ValueError(
+            f"domain {name!r}: unread names streams not in {streams.source}: {', '.join(unknown)}"
+        )
     return LoadedDomain(spec, domain, streams)
 
 

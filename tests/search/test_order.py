@@ -128,7 +128,7 @@ def test_the_shipped_model_orders_kitchen_4_tests_before_motions() -> None:
 
     plans, states, initial, (loaded, problem) = kitchen("kitchen-4", k=2)
     predictor = ModelPredictor.load(DEFAULT_MODEL, domain="kitchen")
-    unread = {s: frozenset(f) for s, f in loaded.spec.unread.items()}
+    unread = loaded.spec.unread
     ordered, ordered_states = _model_order(
         predictor,
         plans,
@@ -152,7 +152,8 @@ def test_the_shipped_model_orders_kitchen_4_tests_before_motions() -> None:
         between = {plan.stream_plan[i].stream for i in range(stove[0], stove[-1])}
         assert "inverse-kinematics" not in between, kinds
     with pytest.raises(AssertionError, match="before they are bound"):
-        check_binding_order(ordered[0], ordered_states[0])  # the IK's standing is not bound
+        # Read in full, a placement's context names the configuration and grasp its IK binds.
+        check_binding_order(ordered[0], ordered_states[0])
 
 
 def test_contexts_out_of_binding_order_are_refused() -> None:
@@ -176,3 +177,17 @@ def test_an_unknown_order_or_a_model_order_for_sequential_is_refused() -> None:
     assert RunConfig(scene="kitchen-1", planner="learned").stream_order == "model"
     assert RunConfig(scene="kitchen-1").stream_order == "plan"
     assert RunConfig(scene="kitchen-1", order="model").stream_order == "model"
+
+
+def test_a_domain_whose_unread_names_an_unknown_stream_is_refused(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import planner.domains as domains
+    from planner.domains import kitchen as kitchen_domain
+
+    typo = replace(kitchen_domain.SPEC, unread={"sample-placment": ("at-conf",)})
+    monkeypatch.setattr(domains, "_registry", lambda: {"kitchen": typo})
+    with pytest.raises(
+        ValueError, match=r"unread names streams not in .*stream\.pddl: sample-placment"
+    ):
+        domains.get_domain("kitchen")
