@@ -1,14 +1,15 @@
-"""Benchmark: does trying IK's base poses nearest first shorten execution?
+"""Benchmark: which order of IK's base poses shortens execution?
 
     .venv/bin/python benchmarks/base_choice.py --scene kitchen-4 --seeds 2000-2009 \
-        --planner baseline --budget 300 --workers 2
+        --planner baseline --budget 300 --workers 2 --settings straight,around
 
-Runs the same seeds with ``SamplerConfig.nearest_base`` off ("drawn": IK tries its base poses in
-the order drawn) and on ("nearest": in order of straight-line travel time from where the robot
-stands), the order of the two alternating from seed to seed so that machine noise hits them
-alike. Prints, per setting, solved trials and the mean planning, execution, total, base travel,
-arm and straight-line-bound seconds and query and motion-query counts over the seeds every
-setting solved, and the paired ratios (nearest / drawn) with bootstrap 95% intervals.
+Runs the same seeds with each ``SamplerConfig.base_order`` of ``--settings``: "drawn" (IK tries
+its base poses in the order drawn), "straight" (in order of straight-line travel time from where
+the robot stands), "around" (in order of the route round the fixtures), the settings' order
+rotating from seed to seed so that machine noise hits them alike. Prints, per setting, solved
+trials and the mean planning, execution, total, base travel, arm and straight-line-bound seconds
+and query and motion-query counts over the seeds every setting solved, and the paired ratios
+against the first setting with bootstrap 95% intervals.
 """
 
 from __future__ import annotations
@@ -57,15 +58,12 @@ def _breakdown(values: dict[str, Any]) -> tuple[float, float, float]:
     return base, arm, bound
 
 
-SETTINGS = ("drawn", "nearest")
-
-
 def _trial(job: tuple[str, int, str, str, float]) -> tuple[int, str, dict[str, float] | None]:
     scene, seed, setting, planner, budget = job
     import planner.domains.kitchen.samplers as ks
 
     original = ks.KitchenSamplers.__init__
-    config = replace(ks.SamplerConfig(), nearest_base=setting == "nearest")
+    config = replace(ks.SamplerConfig(), base_order=setting)
 
     def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
         kw.setdefault("config", config)
@@ -108,6 +106,9 @@ def main() -> int:
     parser.add_argument("--planner", default="baseline", choices=PLANNERS)
     parser.add_argument("--budget", type=float, default=300.0)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument(
+        "--settings", default="straight,around", help="base orders, the first the reference"
+    )
     args = parser.parse_args()
     try:
         seeds = _parse_seeds(args.seeds)
@@ -115,11 +116,16 @@ def main() -> int:
         parser.error("--seeds takes LO-HI or a,b,c (integers)")
     if not seeds or args.workers < 1 or args.budget <= 0:
         parser.error("need seeds, a positive budget and workers >= 1")
-    settings = list(SETTINGS)
+    from planner.domains.kitchen.samplers import BASE_ORDERS
+
+    settings = args.settings.split(",")
+    if len(settings) < 2 or not set(settings) <= set(BASE_ORDERS):
+        parser.error(f"--settings takes two or more of {', '.join(BASE_ORDERS)}")
     logging.basicConfig(level=logging.WARNING)
     jobs = []
     for i, seed in enumerate(seeds):
-        order = settings if i % 2 == 0 else settings[::-1]
+        k = i % len(settings)
+        order = settings[k:] + settings[:k]
         jobs += [(args.scene, seed, c, args.planner, args.budget) for c in order]
     results: dict[tuple[int, str], dict[str, float] | None] = {}
     # A fresh interpreter per trial: OMPL takes one seed per process, so a reused worker would

@@ -18,6 +18,7 @@ from typing import Any
 
 from planner.domains.kitchen import GEOMETRY_KEY
 from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry
+from planner.domains.kitchen.routes import BaseRoutes
 from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
 from planner.domains.kitchen.world import KitchenWorld, block_pose_to_pose
 from planner.pddl.structs import Problem
@@ -42,6 +43,9 @@ from planner.streams.adapters import Failure, StreamAdapter, StreamContext, from
 log = logging.getLogger(__name__)
 
 
+BASE_ORDERS = ("around", "straight", "drawn")
+
+
 @dataclass(frozen=True)
 class SamplerConfig:
     """Budgets and distances of the kitchen samplers."""
@@ -52,7 +56,13 @@ class SamplerConfig:
     corner_jitter: float = 0.01  # metres a packed block may sit in from its grid slot
     ik_attempts: int = 12  # collision-free base poses tried per IK query
     base_attempts: int = 30  # candidate base poses drawn for each of those
-    nearest_base: bool = True  # try IK's base poses in order of straight-line travel time
+    # The order IK tries its base poses in, given where the robot moves from: "around" by the
+    # seconds of the shortest route round the fixtures (routes.py), "straight" by straight-line
+    # seconds, "drawn" as drawn.
+    base_order: str = "around"
+    # Metres the "around" routes keep from a fixture's footprint: the base at rest clears one
+    # at 0.36 square to it and 0.50 turned 45 degrees (with the clearance).
+    route_radius: float = 0.42
     reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
     approach: float = 0.10  # pre-grasp distance along the tool's x axis, metres
     motion: MotionConfig = field(default_factory=MotionConfig)  # OMPL for the base
@@ -67,6 +77,12 @@ class SamplerConfig:
     workspace_margin: float = 1.2  # base may roam this far beyond the fixtures, metres
     clearance: float = 0.015  # metres kept from obstacles along planned motions
     max_straight: float = 0.6  # radians any joint may turn on the straight approach move
+
+    def __post_init__(self) -> None:
+        if self.base_order not in BASE_ORDERS:
+            raise ValueError(
+                f"unknown base_order {self.base_order!r} (known: {', '.join(BASE_ORDERS)})"
+            )
 
 
 def _grasps(size: float, approach: float) -> list[Grasp]:
@@ -167,6 +183,12 @@ class KitchenSamplers:
         self.lower = tuple(JOINT_LIMITS[j][0] for j in ARM_JOINTS[arm])
         self.upper = tuple(JOINT_LIMITS[j][1] for j in ARM_JOINTS[arm])
         self.rest = REST_ARM_CONF[arm]
+        self.routes = BaseRoutes(
+            [p.footprint() for p in geometry.platforms],
+            config.route_radius,
+            tight=BASE_HALF_WIDTH,
+            velocity=BASE_VELOCITY,
+        )
 
     def close(self) -> None:
         self.world.close()
@@ -354,13 +376,18 @@ class KitchenSamplers:
     def _base_candidates(self, pose: BlockPose, came_from: BaseConf | None) -> list[BaseConf]:
         """``ik_attempts`` base poses facing the block, within reach and clear of the fixtures.
 
-        Knowing where the robot stands before it moves here, they come nearest first (straight-
-        line travel time under the velocity limits): IK then returns the reachable one the robot
-        gets to soonest. Execution is what this saves, not planning: the same poses are tried
-        either way, and a pose on the far side of the table costs a detour round it."""
+        Knowing where the robot stands before it moves here, they come nearest first: IK then
+        returns the reachable one the robot gets to soonest. "Nearest" is by the shortest route
+        round the fixtures (``base_order="around"``), since a pose on the far side of the sink or
+        the table is close in a straight line but costs a detour round it; ``"straight"`` orders
+        by straight-line seconds. Execution is what this saves, not planning: the same poses are
+        tried either way."""
         bases = [self._draw_base(pose) for _ in range(self.config.ik_attempts)]
         found = [b for b in bases if b is not None]
-        if came_from is not None and self.config.nearest_base:
+        if came_from is not None and self.config.base_order == "around":
+            seconds = self.routes.seconds_from(came_from)
+            found.sort(key=seconds)
+        elif came_from is not None and self.config.base_order == "straight":
             found.sort(key=lambda b: _straight_base_s(came_from, b))
         return found
 
