@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from planner.abstract import AbstractConfig, plan_abstract
+from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.events import (
@@ -26,18 +27,22 @@ from planner.events import (
     FanOutSink,
     ListSink,
     ModelPrediction,
+    NodeAdded,
     RunCancelled,
     RunFailed,
     RunFinished,
     RunStarted,
+    SolutionFound,
+    StreamQueried,
 )
 from planner.pddl.structs import Atom, Problem
 from planner.search.baseline import BaselineConfig
 from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
 from planner.search.learned import LearnedPolicy, Predictor, StreamCost, stream_rows
-from planner.search.mcts import BaselinePolicy, Policy, TreeSearch
+from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
 from planner.search.tree import Node
+from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult
 
 if TYPE_CHECKING:
@@ -243,7 +248,10 @@ def _run(
     runtime = loaded.runtime(problem, seed=config.seed)
     deadline = start + config.budget_s
     if config.planner == "sequential":
-        return _sequential(config, run_id, plans, loaded, problem, runtime, start, topk_s)
+        recorder = _SequentialRecorder(
+            emitter, plans, fluents, loaded.static_context(problem), start, topk_s
+        )
+        return _sequential(config, run_id, plans, loaded, problem, runtime, start, topk_s, recorder)
     policy: Policy
     if predictor is not None and config.planner == "learned":
         policy = _learned_policy(
@@ -384,14 +392,16 @@ def _sequential(
     runtime: Any,
     start: float,
     topk_s: float,
+    recorder: _SequentialRecorder,
 ) -> tuple[RunResult, LoadedDomain, Problem]:
     queries: list[QueryResult] = []
     bound: BoundPlan | None = None
     tried = 0
-    for plan in plans:
+    for index, plan in enumerate(plans):
         if time.perf_counter() - start > config.budget_s:
             break
         tried += 1
+        recorder.open_plan(index)
         bound, made = bind_sequentially(
             plan,
             loaded.domain,
@@ -399,19 +409,125 @@ def _sequential(
             runtime,
             attempts=config.attempts,
             restarts=config.restarts,
+            observe=recorder.queried,
         )
         queries += made
         if bound is not None:
             break
-    execution_s = None
+    execution_s = oracle_s = None
     if bound is not None:
         execution_s = sum(float(getattr(v, "seconds", 0.0)) for v in _trajectories(bound))
+        oracle_s = recorder.solved(execution_s)
     status = "solved" if bound is not None else "timeout"
     planning_s = time.perf_counter() - start
     result = RunResult(
-        run_id, config, status, bound, planning_s, topk_s, execution_s, None, queries, tried
+        run_id, config, status, bound, planning_s, topk_s, execution_s, oracle_s, queries, tried
     )
     return result, loaded, problem
+
+
+class _SequentialRecorder:
+    """Reports a sequential run as a tree, as the tree searches do: a node per skeleton tried
+    under the root, under it each query's node, a success the parent of the next query (a
+    restart starts again from the skeleton's node). So the dashboard shows the run and the
+    store keeps every query as a training row."""
+
+    def __init__(
+        self,
+        emitter: Emitter,
+        plans: Sequence[AbstractPlan],
+        fluents: frozenset[str],
+        static_context: Mapping[str, Any],
+        start: float,
+        topk_s: float,
+    ) -> None:
+        self.emitter = emitter
+        self.plans = plans
+        self.fluents = fluents
+        self.static_context = static_context
+        self.start = start
+        self.topk_s = topk_s
+        self.next_id = 1  # 0 is the root
+        self.plan_index = -1
+        self.plan_node = 0
+        self.restart = -1
+        self.parent = 0
+        self.chain: list[tuple[int, float]] = []  # (node, wall seconds) of this restart's successes
+
+    def _add(self, parent: int, depth: int, stream: str | None, success: bool, **kw: Any) -> int:
+        node = self.next_id
+        self.next_id += 1
+        self.emitter.emit(
+            NodeAdded,
+            node_id=node,
+            parent_id=parent,
+            plan_index=self.plan_index,
+            depth=depth,
+            stream=stream,
+            success=success,
+            **kw,
+        )
+        return node
+
+    def open_plan(self, index: int) -> None:
+        self.plan_index, self.restart, self.chain = index, -1, []
+        plan = self.plans[index]
+        label = f"plan {index} ({len(plan.stream_plan)} streams)"
+        self.plan_node = self._add(0, 0, None, True, outputs=[], label=label)
+
+    def queried(
+        self,
+        restart: int,
+        i: int,
+        inst: StreamInstance,
+        inputs: tuple[Any, ...],
+        context: StreamContext,
+        result: QueryResult,
+    ) -> None:
+        if restart != self.restart:
+            self.restart, self.parent, self.chain = restart, self.plan_node, []
+        node = self.next_id
+        self.emitter.emit(
+            StreamQueried,
+            node_id=node,
+            stream=inst.stream,
+            input_names=list(inst.inputs),
+            inputs=[jsonable(v) for v in inputs],
+            success=result.success,
+            wall_s=result.wall_s,
+            cpu_s=result.cpu_s,
+            execution_s=result.execution_s,
+            error=result.error,
+            context=context_json(context, self.fluents, self.static_context, jsonable),
+            reason=result.reason,
+        )
+        outputs = list(result.outputs) if result.outputs is not None else []
+        label = f"{inst}" + ("" if result.success else " (failed)")
+        self._add(
+            self.parent,
+            i + 1,
+            inst.stream,
+            result.success,
+            outputs=[jsonable(v) for v in outputs],
+            label=label,
+            output_names=list(inst.outputs) if result.success else [],
+        )
+        if result.success:
+            self.parent = node
+            self.chain.append((node, result.wall_s))
+
+    def solved(self, execution_s: float) -> float:
+        """Reports the solution (the last success); returns its oracle seconds."""
+        oracle = self.topk_s + sum(wall for _, wall in self.chain)
+        self.emitter.emit(
+            SolutionFound,
+            node_id=self.parent,
+            plan_index=self.plan_index,
+            planning_s=time.perf_counter() - self.start,
+            execution_s=execution_s,
+            oracle_s=oracle,
+        )
+        return oracle
 
 
 def _trajectories(bound: BoundPlan) -> list[Any]:

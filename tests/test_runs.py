@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from planner.events import RunFinished, RunStarted, SolutionFound, StreamQueried
+from planner.events import NodeAdded, RunFinished, RunStarted, SolutionFound, StreamQueried
 from planner.learning.features import room_left
 from planner.runs import RunConfig, run
 from planner.store import RunStore, StoreSink
@@ -45,6 +45,41 @@ def test_recorded_run_keeps_every_event_and_query(tmp_path: Path) -> None:
     assert len(rows) == len(queried)
     assert {r.stream for r in rows} == {"sample-pose", "test-reachable"}
     assert any(not r.success for r in rows)  # the short reach makes tests fail
+    store.close()
+
+
+def test_sequential_run_is_recorded_as_a_tree(tmp_path: Path) -> None:
+    """The sequential planner reports its queries as the tree searches do: the store keeps
+    every one as a training row, and the events form a tree the dashboard can show, each query
+    under the last success of its restart, ending in the solution."""
+    store = RunStore(tmp_path / "runs.db")
+    config = RunConfig(scene=LINE, seed=3, k=4, budget_s=30, planner="sequential")
+    run_id = store.create_run(LINE, 3, "sequential", {"k": 4})
+    sink = StoreSink(store, run_id)
+    result, _, _ = run(config, sink=sink, run_id=run_id)
+    sink.close()
+    assert result.solved
+    assert result.oracle_s is not None and result.topk_s <= result.oracle_s <= result.planning_s
+    events = store.events(run_id)
+    queried = [e for e in events if isinstance(e, StreamQueried)]
+    assert len(queried) == len(result.queries) > 0
+    rows = store.stream_queries(run_ids=[run_id])
+    assert len(rows) == len(queried)
+    assert any(not r.success for r in rows)  # the short reach makes tests fail
+    assert all(r.context.get("facts") is not None for r in rows)
+    added = {e.node_id: e for e in events if isinstance(e, NodeAdded)}
+    assert {q.node_id for q in queried} <= set(added)
+    for node in added.values():  # every parent is the root or an earlier successful node
+        assert node.parent_id == 0 or (node.parent_id in added and added[node.parent_id].success)
+        if node.stream is not None:
+            assert node.depth == added[node.parent_id].depth + 1  # type: ignore[index]
+    (solution,) = [e for e in events if isinstance(e, SolutionFound)]
+    leaf = added[solution.node_id]
+    assert leaf.success and leaf.plan_index == solution.plan_index
+    depth, node = 0, leaf
+    while node.parent_id:  # the solution's branch binds a whole plan
+        depth, node = depth + 1, added[node.parent_id]
+    assert depth == leaf.depth
     store.close()
 
 

@@ -9,16 +9,23 @@ issue 4 decides which stream to query next instead.
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan, symbolic_states
 from planner.pddl.structs import Atom, Domain, Problem
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
 
 log = logging.getLogger(__name__)
+
+# Told of every query bind_sequentially makes: the restart, the stream's index in the plan,
+# the stream instance, its input values, the context it saw and the result.
+QueryObserver = Callable[
+    [int, int, StreamInstance, tuple[Any, ...], StreamContext, QueryResult], None
+]
 
 
 @dataclass(frozen=True)
@@ -48,9 +55,10 @@ def bind_sequentially(
     *,
     attempts: int = 10,
     restarts: int = 5,
+    observe: QueryObserver | None = None,
 ) -> tuple[BoundPlan | None, list[QueryResult]]:
     """Bind ``plan`` by querying its streams in order; return the bound plan (or ``None``) and
-    every query made."""
+    every query made (each also told to ``observe`` as it is made)."""
     if attempts < 1 or restarts < 1:
         raise ValueError("attempts and restarts must be at least 1")
     contexts = stream_contexts(plan, domain, problem)
@@ -67,6 +75,8 @@ def bind_sequentially(
                     inst.stream, inputs, key=(restart, inst.stream, inst.inputs), context=context
                 )
                 queries.append(result)
+                if observe is not None:
+                    observe(restart, i, inst, inputs, context, result)
                 if result.outputs is not None:
                     values.update(zip(inst.outputs, result.outputs, strict=True))
                     break

@@ -115,6 +115,24 @@ class SearchResult:
         return self.status == "solved"
 
 
+def context_json(
+    context: StreamContext,
+    fluents: frozenset[str],
+    static_context: Mapping[str, Any],
+    encode: Callable[[Any], Any],
+) -> dict[str, Any]:
+    """What a query's ``stream_queried`` event records of the world its sampler saw: the
+    fluent facts of its context, the encoded values of their objects, the static context."""
+    facts = sorted(a for a in context.state if a.predicate in fluents)
+    names = {x for a in facts for x in a.args}
+    values = {
+        n: encode(context.values[n])
+        for n in sorted(names)
+        if n in context.values and not isinstance(context.values[n], str)
+    }
+    return {**static_context, "facts": [[a.predicate, *a.args] for a in facts], "values": values}
+
+
 class TreeSearch:
     """One search over the stream plans of ``skeletons``."""
 
@@ -262,18 +280,7 @@ class TreeSearch:
         return child
 
     def _context_json(self, context: StreamContext) -> dict[str, Any]:
-        facts = sorted(a for a in context.state if a.predicate in self.fluents)
-        names = {x for a in facts for x in a.args}
-        values = {
-            n: self.encode(context.values[n])
-            for n in sorted(names)
-            if n in context.values and not isinstance(context.values[n], str)
-        }
-        return {
-            **self.static_context,
-            "facts": [[a.predicate, *a.args] for a in facts],
-            "values": values,
-        }
+        return context_json(context, self.fluents, self.static_context, self.encode)
 
     def _complete(self, node: Node) -> bool:
         return node.success and node.depth == len(self.skeletons[node.plan_index].stream_plan)
