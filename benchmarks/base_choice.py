@@ -1,15 +1,17 @@
-"""Benchmark: which order of IK's base poses shortens execution?
+"""Benchmark: which choice of IK's base poses shortens execution?
 
     .venv/bin/python benchmarks/base_choice.py --scene kitchen-4 --seeds 2000-2009 \
         --planner baseline --budget 300 --workers 2 --settings straight,around
+    .venv/bin/python benchmarks/base_choice.py --field ik_attempts --settings 12,48
 
-Runs the same seeds with each ``SamplerConfig.base_order`` of ``--settings``: "drawn" (IK tries
-its base poses in the order drawn), "straight" (in order of straight-line travel time from where
-the robot stands), "around" (in order of the route round the fixtures), the settings' order
-rotating from seed to seed so that machine noise hits them alike. Prints, per setting, solved
-trials and the mean planning, execution, total, base travel, arm and straight-line-bound seconds
-and query and motion-query counts over the seeds every setting solved, and the paired ratios
-against the first setting with bootstrap 95% intervals.
+Runs the same seeds with each value of ``--settings`` for the ``SamplerConfig`` field
+``--field`` (default ``base_order``: "drawn", IK tries its base poses in the order drawn;
+"straight", in order of straight-line travel time from where the robot stands; "around", in
+order of the route round the fixtures; ``ik_attempts``: how many base poses IK draws), the
+settings' order rotating from seed to seed so that machine noise hits them alike. Prints, per
+setting, solved trials and the mean planning, execution, total, base travel, arm and
+straight-line-bound seconds and query and motion-query counts over the seeds every setting
+solved, and the paired ratios against the first setting with bootstrap 95% intervals.
 """
 
 from __future__ import annotations
@@ -58,12 +60,22 @@ def _breakdown(values: dict[str, Any]) -> tuple[float, float, float]:
     return base, arm, bound
 
 
-def _trial(job: tuple[str, int, str, str, float]) -> tuple[int, str, dict[str, float] | None]:
-    scene, seed, setting, planner, budget = job
+def _config(field: str, setting: str) -> Any:
+    """The default ``SamplerConfig`` with ``field`` set from the text ``setting``."""
+    from planner.domains.kitchen.samplers import SamplerConfig
+
+    default = getattr(SamplerConfig(), field)
+    return replace(SamplerConfig(), **{field: type(default)(setting)})
+
+
+def _trial(
+    job: tuple[str, int, str, str, str, float],
+) -> tuple[int, str, dict[str, float] | None]:
+    scene, seed, field, setting, planner, budget = job
     import planner.domains.kitchen.samplers as ks
 
     original = ks.KitchenSamplers.__init__
-    config = replace(ks.SamplerConfig(), base_order=setting)
+    config = _config(field, setting)
 
     def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
         kw.setdefault("config", config)
@@ -106,8 +118,9 @@ def main() -> int:
     parser.add_argument("--planner", default="baseline", choices=PLANNERS)
     parser.add_argument("--budget", type=float, default=300.0)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--field", default="base_order", help="the SamplerConfig field to vary")
     parser.add_argument(
-        "--settings", default="straight,around", help="base orders, the first the reference"
+        "--settings", default="straight,around", help="its values, the first the reference"
     )
     args = parser.parse_args()
     try:
@@ -116,17 +129,24 @@ def main() -> int:
         parser.error("--seeds takes LO-HI or a,b,c (integers)")
     if not seeds or args.workers < 1 or args.budget <= 0:
         parser.error("need seeds, a positive budget and workers >= 1")
-    from planner.domains.kitchen.samplers import BASE_ORDERS
+    from planner.domains.kitchen.samplers import SamplerConfig
 
     settings = args.settings.split(",")
-    if len(settings) < 2 or not set(settings) <= set(BASE_ORDERS):
-        parser.error(f"--settings takes two or more of {', '.join(BASE_ORDERS)}")
+    if len(settings) < 2:
+        parser.error("--settings takes two or more values, comma-separated")
+    if not isinstance(getattr(SamplerConfig(), args.field, None), str | int | float):
+        parser.error(f"--field {args.field!r} is not a text or number field of SamplerConfig")
+    for setting in settings:
+        try:
+            _config(args.field, setting)
+        except ValueError as exc:
+            parser.error(f"--settings {setting!r}: {exc}")
     logging.basicConfig(level=logging.WARNING)
     jobs = []
     for i, seed in enumerate(seeds):
         k = i % len(settings)
         order = settings[k:] + settings[:k]
-        jobs += [(args.scene, seed, c, args.planner, args.budget) for c in order]
+        jobs += [(args.scene, seed, args.field, c, args.planner, args.budget) for c in order]
     results: dict[tuple[int, str], dict[str, float] | None] = {}
     # A fresh interpreter per trial: OMPL takes one seed per process, so a reused worker would
     # plan each later trial from wherever the first one left its random generator.
@@ -139,7 +159,7 @@ def main() -> int:
     both = [s for s in seeds if all(results.get((s, c)) for c in settings)]
     print(f"{args.scene}, {args.planner}, seeds {seeds[0]}-{seeds[-1]}; {len(both)} solved by all")
     keys = ("planning", "execution", "total", "base", "arm", "bound", "queries", "motions")
-    print("| base poses | solved | " + " | ".join(keys) + " |")
+    print(f"| {args.field} | solved | " + " | ".join(keys) + " |")
     print("|---" * (len(keys) + 2) + "|")
     for c in settings:
         solved = sum(results.get((s, c)) is not None for s in seeds)
