@@ -55,9 +55,11 @@ class SamplerConfig:
     corner_fraction: float = 0.75  # placement tries on the packing grid, the rest uniform
     corner_jitter: float = 0.01  # metres a packed block may sit in from its grid slot
     # Collision-free base poses drawn per IK query, tried nearest first: the more drawn, the
-    # nearer the first that works. 96, not 12: kitchen-4 baseline execution 0.89x, kitchen-8
-    # learned 0.82x, planning unchanged (benchmarks/base_choice.py --field ik_attempts).
-    ik_attempts: int = 96
+    # nearer the first that works. 96 cut execution by a tenth to a fifth (base_choice.py
+    # --field ik_attempts), but each IK query costs four times as much, and the learned planner
+    # then timed out on kitchen-4 seed 1009, stuck re-sampling grasps and IK (docs/BENCHMARKS.md,
+    # *How many base poses IK draws*). 12 until that dead end is found faster.
+    ik_attempts: int = 12
     base_attempts: int = 30  # candidate base poses drawn for each of those
     # The order IK tries its base poses in, given where the robot moves from: "around" by the
     # seconds of the shortest route round the fixtures (routes.py), "straight" by straight-line

@@ -1,0 +1,74 @@
+"""Probe: where one run's time went, by stream and outcome, with a sampler setting changed.
+
+    .venv/bin/python benchmarks/run_breakdown.py --scene kitchen-8 --seed 1003 \\
+        --planner learned --budget 200 --field ik_attempts --value 96
+
+Runs one trial in this process (``SamplerConfig.FIELD`` set to ``VALUE`` when given) and prints
+its status, planning and execution seconds, the queries of each stream by outcome with the
+seconds they took, and the five commonest failure reasons.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import random
+import sys
+from collections import Counter
+from dataclasses import replace
+from typing import Any
+
+from planner.runs import PLANNERS, RunConfig, run
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--scene", default="kitchen-8")
+    parser.add_argument("--seed", type=int, default=1003)
+    parser.add_argument("--planner", default="learned", choices=PLANNERS)
+    parser.add_argument("--budget", type=float, default=200.0)
+    parser.add_argument("--field", help="a SamplerConfig field to set")
+    parser.add_argument("--value", help="its value")
+    args = parser.parse_args()
+    if (args.field is None) != (args.value is None):
+        parser.error("--field and --value go together")
+    logging.basicConfig(level=logging.WARNING)
+    if args.field is not None:
+        import planner.domains.kitchen.samplers as ks
+
+        default = getattr(ks.SamplerConfig(), args.field, None)
+        if not isinstance(default, str | int | float):
+            parser.error(f"--field {args.field!r} is not a text or number field of SamplerConfig")
+        config = replace(ks.SamplerConfig(), **{args.field: type(default)(args.value)})
+        original = ks.KitchenSamplers.__init__
+
+        def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
+            kw.setdefault("config", config)
+            original(self, geometry, rng, **kw)
+
+        ks.KitchenSamplers.__init__ = init  # type: ignore[method-assign]
+    result, _, _ = run(
+        RunConfig(scene=args.scene, seed=args.seed, planner=args.planner, budget_s=args.budget)
+    )
+    execution = "-" if result.execution_s is None else f"{result.execution_s:.1f} s"
+    print(
+        f"{args.scene} seed {args.seed} {args.planner}: {result.status}, planning "
+        f"{result.planning_s:.1f} s, execution {execution}"
+    )
+    counts: Counter[tuple[str, bool]] = Counter()
+    seconds: Counter[tuple[str, bool]] = Counter()
+    for q in result.queries:
+        counts[(q.stream, q.success)] += 1
+        seconds[(q.stream, q.success)] += q.wall_s
+    for stream, ok in sorted(counts):
+        outcome = "succeeded" if ok else "failed"
+        n, s = counts[(stream, ok)], seconds[(stream, ok)]
+        print(f"  {stream} {outcome}: {n} queries, {s:.1f} s")
+    reasons = Counter((q.reason or q.error or "?")[:80] for q in result.queries if not q.success)
+    for reason, n in reasons.most_common(5):
+        print(f"  {n} x {reason}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
