@@ -5,7 +5,11 @@
 
 Runs one trial in this process (``SamplerConfig.FIELD`` set to ``VALUE`` when given) and prints
 its status, planning and execution seconds, the queries of each stream by outcome with the
-seconds they took, and the five commonest failure reasons.
+seconds they took, and the five commonest failure reasons. ``--db FILE`` also records the run
+(events and queries) in that store, for queries such as which block's streams were asked:
+``sqlite3 FILE "select stream, json_extract(inputs, '$[0]'), success, count(*) from
+stream_queries group by 1, 2, 3 order by 4 desc"``. A run that times out makes as many queries
+as the machine's pace allows within the budget.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ def main() -> int:
     parser.add_argument("--budget", type=float, default=200.0)
     parser.add_argument("--field", help="a SamplerConfig field to set")
     parser.add_argument("--value", help="its value")
+    parser.add_argument("--db", help="also record the run in this store (SQLite file)")
     args = parser.parse_args()
     if (args.field is None) != (args.value is None):
         parser.error("--field and --value go together")
@@ -39,7 +44,10 @@ def main() -> int:
         default = getattr(ks.SamplerConfig(), args.field, None)
         if not isinstance(default, str | int | float):
             parser.error(f"--field {args.field!r} is not a text or number field of SamplerConfig")
-        config = replace(ks.SamplerConfig(), **{args.field: type(default)(args.value)})
+        try:
+            config = replace(ks.SamplerConfig(), **{args.field: type(default)(args.value)})
+        except ValueError as exc:
+            parser.error(f"--value {args.value!r}: {exc}")
         original = ks.KitchenSamplers.__init__
 
         def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
@@ -47,9 +55,23 @@ def main() -> int:
             original(self, geometry, rng, **kw)
 
         ks.KitchenSamplers.__init__ = init  # type: ignore[method-assign]
-    result, _, _ = run(
-        RunConfig(scene=args.scene, seed=args.seed, planner=args.planner, budget_s=args.budget)
+    config_run = RunConfig(
+        scene=args.scene, seed=args.seed, planner=args.planner, budget_s=args.budget
     )
+    if args.db is None:
+        result, _, _ = run(config_run)
+    else:
+        from planner.store import RunStore, StoreSink
+
+        store = RunStore(args.db)
+        run_id = store.create_run(args.scene, args.seed, args.planner, {"budget_s": args.budget})
+        sink = StoreSink(store, run_id)
+        try:
+            result, _, _ = run(config_run, sink=sink, run_id=run_id)
+        finally:
+            sink.close()
+            store.close()
+        print(f"recorded as run {run_id} in {args.db}")
     execution = "-" if result.execution_s is None else f"{result.execution_s:.1f} s"
     print(
         f"{args.scene} seed {args.seed} {args.planner}: {result.status}, planning "

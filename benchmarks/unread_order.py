@@ -1,6 +1,7 @@
 """Probe: does the model order's ``DomainSpec.unread`` change the learned planner's execution?
 
-    .venv/bin/python benchmarks/unread_order.py --scene kitchen-8 --seeds 1012-1035 --budget 600
+    .venv/bin/python benchmarks/unread_order.py --scene kitchen-8 --seeds 1012-1035 --budget 600 \
+        [--base-order straight]
 
 Runs the learned planner on the same seeds twice, once with the domain's ``unread`` (the
 default since 2cef2e3: every placement before any IK) and once without it (each placement after
@@ -8,7 +9,8 @@ the grasp and IK its context names, as at 671f94b), the two alternating their or
 seed, two workers, a fresh interpreter per trial. Prints each trial and, over the seeds both
 solved, the paired mean difference of execution seconds (with unread minus without) with a
 bootstrap 95% interval, how many seeds it is positive on, and the mean planning seconds and
-queries of each setting.
+queries of each setting. ``--base-order straight`` gives IK's base poses the order they had
+before 1110744 (so the runs are those of 3ed1992).
 """
 
 from __future__ import annotations
@@ -20,14 +22,25 @@ import random
 import statistics
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 from typing import Any
 
 SETTINGS = ("unread", "all")  # "all": the order waits for every fluent's objects
 
 
-def _trial(job: tuple[str, int, str, float]) -> dict[str, Any]:
-    scene, seed, setting, budget = job
+def _trial(job: tuple[str, int, str, float, str]) -> dict[str, Any]:
+    scene, seed, setting, budget, base_order = job
+    import planner.domains.kitchen.samplers as ks
     import planner.runs as runs
+
+    config = replace(ks.SamplerConfig(), base_order=base_order)
+    init = ks.KitchenSamplers.__init__
+
+    def with_order(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
+        kw.setdefault("config", config)
+        init(self, geometry, rng, **kw)
+
+    ks.KitchenSamplers.__init__ = with_order  # type: ignore[method-assign]
 
     original = runs._model_order
     if setting == "all":
@@ -63,6 +76,7 @@ def main() -> int:
     parser.add_argument("--seeds", default="1012-1035", help="range LO-HI or a list a,b,c")
     parser.add_argument("--budget", type=float, default=600.0)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--base-order", default="around", help="SamplerConfig.base_order")
     args = parser.parse_args()
     try:
         seeds = _parse_seeds(args.seeds)
@@ -70,11 +84,15 @@ def main() -> int:
         parser.error("--seeds takes LO-HI or a,b,c (integers)")
     if not seeds or args.workers < 1 or args.budget <= 0:
         parser.error("need seeds, a positive budget and workers >= 1")
+    from planner.domains.kitchen.samplers import BASE_ORDERS
+
+    if args.base_order not in BASE_ORDERS:
+        parser.error(f"--base-order takes one of {', '.join(BASE_ORDERS)}")
     logging.basicConfig(level=logging.WARNING)
     jobs = []
     for i, seed in enumerate(seeds):
         order = SETTINGS if i % 2 == 0 else SETTINGS[::-1]
-        jobs += [(args.scene, seed, s, args.budget) for s in order]
+        jobs += [(args.scene, seed, s, args.budget, args.base_order) for s in order]
     trials: dict[tuple[int, str], dict[str, Any]] = {}
     ctx = multiprocessing.get_context("spawn")  # OMPL takes one seed per process
     with ProcessPoolExecutor(args.workers, mp_context=ctx, max_tasks_per_child=1) as pool:
@@ -96,6 +114,7 @@ def main() -> int:
     print(
         f"execution, with unread - without: {statistics.mean(diff):+.1f} s "
         f"(95% CI {means[100]:+.1f} to {means[3899]:+.1f}), positive on {sum(d > 0 for d in diff)}"
+        + (f", SD {statistics.stdev(diff):.1f} s" if len(diff) > 1 else "")
     )
     for c in SETTINGS:
         planning = statistics.mean(trials[(s, c)]["planning"] for s in both)

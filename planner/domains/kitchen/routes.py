@@ -5,7 +5,7 @@ table looks short, but the move has to go round the fixture: such moves took thr
 times their straight-line seconds in the benchmarks. :class:`BaseRoutes` gives the length of the
 shortest path in the plane that keeps the base's centre a radius away from every fixture's
 footprint (a visibility graph over the corners of the footprints grown into octagons, Dijkstra
-from the start; computed in about a millisecond), and from it the seconds of the move under the
+from the start, over two dozen corners), and from it the seconds of the move under the
 base's velocity limits. It knows the detour a straight line ignores; it knows nothing of the
 blocks or the arm, and a planned move is still longer (the motion planner's paths are not
 shortest).

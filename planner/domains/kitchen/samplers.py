@@ -66,7 +66,7 @@ class SamplerConfig:
     # seconds, "drawn" as drawn.
     base_order: str = "around"
     # Metres the "around" routes keep from a fixture's footprint: the base at rest clears one
-    # at 0.36 square to it and 0.50 turned 45 degrees (with the clearance).
+    # at 0.36 square to it and 0.50 turned 45 degrees (with the clearance; base_extent.py).
     route_radius: float = 0.42
     reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
     approach: float = 0.10  # pre-grasp distance along the tool's x axis, metres
