@@ -31,6 +31,7 @@ DEAD_END_MAX = 0.95  # most chance that a query not yet made is a dead end
 DEAD_END_DOUBT = 0.1  # a run of failures less likely than this under P_S means a dead end
 DEAD_END_MIN = 2  # failures in a row before any node is taken for a dead end
 PRIOR_CHILDREN = 0.5  # how many observed children the model's guess of a new one weighs
+SHARED_MIN = 3  # failures under varied later choices before the earlier ones they share are blamed
 
 
 @dataclass(frozen=True)
@@ -204,6 +205,9 @@ class LearnedPolicy:
     _known: dict[str, float] = field(default_factory=dict)
     _scanned: int = 0
     _reusable: list[list[bool]] = field(default_factory=list)
+    # Per node that queries: the values its next query depends on (encoded, comparable) and the
+    # depth that bound each (0: the problem's own objects).
+    _sigs: dict[int, tuple[dict[str, str], dict[str, int]]] = field(default_factory=dict)
 
     # --- Q of a node -------------------------------------------------------------------------
 
@@ -436,7 +440,10 @@ class LearnedPolicy:
         origin: dict[int, int] = {}  # dead node -> depth of the failures behind it
         for _ in range(8):  # new dead ends fail their parents' queries: pool again
             pooled = self._pooled_failures(tree, dead, origin, deepest)
-            before = len(dead)
+            before = len(dead), sum(len(r) for r in dead.values())
+            for node, reason in self._shared_culprits(tree, dead):
+                depth = min(origin.get(c, tree[c].depth) for c in node.children)
+                self._mark(tree, dead, origin, node, reason, depth)
             for node in reversed(tree.nodes[1:]):
                 if node.id in dead or not node.success or node.depth == 0:
                     continue
@@ -455,19 +462,108 @@ class LearnedPolicy:
                 for c in node.children:
                     if c in dead:
                         reason |= dead[c] - set(tree[c].outputs)
-                current = node
-                dead[current.id] = reason
-                origin[current.id] = depth
-                while not (set(current.outputs) & reason) and current.parent is not None:
-                    parent = tree[current.parent]
-                    if parent.depth == 0 or parent.id == ROOT:
-                        break
-                    dead[parent.id] = reason
-                    origin[parent.id] = depth
-                    current = parent
-            if len(dead) == before:
+                self._mark(tree, dead, origin, node, reason, depth)
+            if (len(dead), sum(len(r) for r in dead.values())) == before:
                 break
         return set(dead)
+
+    @staticmethod
+    def _mark(
+        tree: Tree,
+        dead: dict[int, set[str]],
+        origin: dict[int, int],
+        node: Node,
+        reason: set[str],
+        depth: int,
+    ) -> None:
+        """Take ``node`` for a dead end because of ``reason`` (the objects its failures, at
+        ``depth``, depend on), and its ancestors up to the one that bound one of them."""
+        current = node
+        dead[current.id] = reason
+        origin[current.id] = depth
+        while not (set(current.outputs) & reason) and current.parent is not None:
+            parent = tree[current.parent]
+            if parent.depth == 0 or parent.id == ROOT:
+                break
+            dead[parent.id] = reason
+            origin[parent.id] = depth
+            current = parent
+
+    def _signature(self, tree: Tree, node: Node) -> tuple[dict[str, str], dict[str, int]]:
+        """The values of the objects ``node``'s next query depends on (:meth:`_relevant`),
+        encoded so that equal values compare equal, and the depth that bound each."""
+        cached = self._sigs.get(node.id)
+        if cached is not None:
+            return cached
+        values = dict(self.initial_values)
+        bound_at: dict[str, int] = {}
+        for i in tree.path(node.id):
+            for name, value in tree[i].outputs.items():
+                values[name] = value
+                bound_at[name] = tree[i].depth
+        sig = {
+            name: json.dumps(self.encode(values[name]), sort_keys=True, default=str)
+            for name in sorted(self._relevant(node))
+            if name in values
+        }
+        cached = (sig, {name: bound_at.get(name, 0) for name in sig})
+        self._sigs[node.id] = cached
+        return cached
+
+    def _shared_culprits(
+        self, tree: Tree, dead: Mapping[int, set[str]]
+    ) -> list[tuple[Node, set[str]]]:
+        """Queries that keep failing while a later choice they depend on varies, blamed on the
+        earlier choices every failure shared.
+
+        Pooling by identity (:meth:`_pooled_failures`) needs the same query to fail again, but
+        the search may never ask it twice: after one failure, re-sampling higher up looks
+        cheaper, and each re-sample changes an input of the failing query. Kitchen-4 seed 1009
+        (96 IK base poses): the last block's stove placement failed 99 times, each under a
+        different placement of the block before it, while the two first blocks' stove places,
+        which left no room, were never re-sampled; the run timed out. So, per stream of a plan:
+        take the latest node whose query there failed every time it was made, and the values
+        that query depended on; from the deepest choice up, drop the values bound last
+        until the nodes whose query agrees on the rest have failed at least
+        :data:`SHARED_MIN` times (and as often as :func:`dead_after` asks) with no success
+        among them. Those nodes are dead ends because of the values kept, and the search backs
+        up to the last of them."""
+        groups: dict[tuple[int, int], list[Node]] = {}
+        for node in tree.nodes[1:]:
+            if node.success and node.depth > 0 and node.children and self._terms.get(node.id):
+                groups.setdefault((node.plan_index, node.depth), []).append(node)
+        out: list[tuple[Node, set[str]]] = []
+
+        def failed(n: Node) -> bool:  # the query itself failed, every time it was made here
+            return not any(tree[c].success for c in n.children)
+
+        for makers in groups.values():
+            failing = [n for n in makers if failed(n)]
+            if len(failing) < SHARED_MIN:
+                continue
+            latest = failing[-1]
+            sig, bound_at = self._signature(tree, latest)
+            first = self._terms[latest.id][0][1]
+            need = max(SHARED_MIN, dead_after(first.p_s, p_prior=first.p_prior))
+            depths = sorted(set(bound_at.values()), reverse=True)
+            for cut in depths[1:]:  # the deepest cut is the query's identity: pooled already
+                kept = {n: v for n, v in sig.items() if bound_at[n] <= cut}
+                agree = [m for m in makers if self._agrees(tree, m, kept)]
+                if not all(failed(m) for m in agree):
+                    break  # a success shares these values: so would every shallower cut's
+                failures = sum(len(m.children) for m in agree)
+                if failures < need:
+                    continue
+                if len({json.dumps(self._signature(tree, m)[0]) for m in agree}) < 2:
+                    continue  # the same query each time: its identity pools it
+                reason = set(kept)
+                out += [(m, reason) for m in agree if dead.get(m.id) != reason]
+                break
+        return out
+
+    def _agrees(self, tree: Tree, node: Node, kept: Mapping[str, str]) -> bool:
+        sig = self._signature(tree, node)[0]
+        return all(sig.get(n) == v for n, v in kept.items())
 
     @staticmethod
     def _deepest(tree: Tree) -> dict[int, int]:
