@@ -55,11 +55,12 @@ class SamplerConfig:
     corner_fraction: float = 0.75  # placement tries on the packing grid, the rest uniform
     corner_jitter: float = 0.01  # metres a packed block may sit in from its grid slot
     # Collision-free base poses drawn per IK query, tried nearest first: the more drawn, the
-    # nearer the first that works. 96 cut execution by a tenth to a fifth (base_choice.py
-    # --field ik_attempts), but each IK query costs four times as much, and the learned planner
-    # then timed out on kitchen-4 seed 1009, stuck re-sampling grasps and IK (docs/BENCHMARKS.md,
-    # *How many base poses IK draws*). 12 until that dead end is found faster.
-    ik_attempts: int = 12
+    # nearer the first that works. 96 rather than 12 cuts execution by a tenth to a fifth
+    # (base_choice.py --field ik_attempts; docs/BENCHMARKS.md, *How many base poses IK draws*)
+    # for four times the seconds per IK query. At 12 until 2af562f: before it, the learned
+    # planner timed out on kitchen-4 seed 1009 with 96, re-sampling the placement before a full
+    # stove instead of the ones that had filled it.
+    ik_attempts: int = 96
     base_attempts: int = 30  # candidate base poses drawn for each of those
     # The order IK tries its base poses in, given where the robot moves from: "around" by the
     # seconds of the shortest route round the fixtures (routes.py), "straight" by straight-line
