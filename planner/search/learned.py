@@ -438,10 +438,13 @@ class LearnedPolicy:
         deepest = self._deepest(tree)
         dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
         origin: dict[int, int] = {}  # dead node -> depth of the failures behind it
+        shared = self._shared_culprits(tree)  # reads only query outcomes: once per refresh
         for _ in range(8):  # new dead ends fail their parents' queries: pool again
             pooled = self._pooled_failures(tree, dead, origin, deepest)
             before = len(dead), sum(len(r) for r in dead.values())
-            for node, reason in self._shared_culprits(tree, dead):
+            for node, reason in shared:
+                if dead.get(node.id) == reason:
+                    continue
                 depth = min(origin.get(c, tree[c].depth) for c in node.children)
                 self._mark(tree, dead, origin, node, reason, depth)
             for node in reversed(tree.nodes[1:]):
@@ -510,9 +513,7 @@ class LearnedPolicy:
         self._sigs[node.id] = cached
         return cached
 
-    def _shared_culprits(
-        self, tree: Tree, dead: Mapping[int, set[str]]
-    ) -> list[tuple[Node, set[str]]]:
+    def _shared_culprits(self, tree: Tree) -> list[tuple[Node, set[str]]]:
         """Queries that keep failing while a later choice they depend on varies, blamed on the
         earlier choices every failure shared.
 
@@ -554,10 +555,10 @@ class LearnedPolicy:
                 failures = sum(len(m.children) for m in agree)
                 if failures < need:
                     continue
-                if len({json.dumps(self._signature(tree, m)[0]) for m in agree}) < 2:
+                if len({tuple(self._signature(tree, m)[0].items()) for m in agree}) < 2:
                     continue  # the same query each time: its identity pools it
                 reason = set(kept)
-                out += [(m, reason) for m in agree if dead.get(m.id) != reason]
+                out += [(m, reason) for m in agree]
                 break
         return out
 
