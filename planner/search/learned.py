@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -139,12 +139,16 @@ def stream_rows(
     fluents: frozenset[str],
     static_context: Mapping[str, Any],
     start: int = 0,
+    only: Collection[int] | None = None,
 ) -> list[tuple[str, list[Any | None], dict[str, Any]]]:
-    """The model rows of ``plan``'s streams from ``start`` on: stream, encoded inputs (None
-    while unbound) and the context (fluent facts, their bound values, the scene's static
-    facts), as the models were trained on them."""
+    """The model rows of ``plan``'s streams from ``start`` on (of those in ``only``, if
+    given): stream, encoded inputs (None while unbound) and the context (fluent facts, their
+    bound values, the scene's static facts), as the models were trained on them. A row reads
+    only the values of :func:`row_names`."""
     rows = []
     for i in range(start, len(plan.stream_plan)):
+        if only is not None and i not in only:
+            continue
         inst = plan.stream_plan[i]
         inputs = [encode(values[n]) if n in values else None for n in inst.inputs]
         facts = sorted(a for a in states[i] if a.predicate in fluents)
@@ -160,6 +164,23 @@ def stream_rows(
         }
         rows.append((inst.stream, inputs, context))
     return rows
+
+
+def row_names(
+    plan: AbstractPlan, states: Sequence[frozenset[Atom]], fluents: frozenset[str]
+) -> list[frozenset[str]]:
+    """Per stream of ``plan``: the objects whose values its model row reads (its inputs and the
+    arguments of its context's fluent facts). A row none of whose objects a new binding names
+    is the same row as before that binding."""
+    return [
+        frozenset(inst.inputs)
+        | frozenset(x for a in states[i] if a.predicate in fluents for x in a.args)
+        for i, inst in enumerate(plan.stream_plan)
+    ]
+
+
+# A stream's row as the search keeps it: (identity key, prediction, reuse identity).
+_Entry = tuple[str | None, StreamCost, str | None]
 
 
 class Predictor(Protocol):
@@ -208,11 +229,19 @@ class LearnedPolicy:
     # Per node that queries: the values its next query depends on (encoded, comparable) and the
     # depth that bound each (0: the problem's own objects).
     _sigs: dict[int, tuple[dict[str, str], dict[str, int]]] = field(default_factory=dict)
+    # Per node predicted: (identity key, prediction, reuse identity) of each stream from its
+    # depth on; a child's rows that its new binding leaves alone are taken from here.
+    _entries: dict[int, list[_Entry]] = field(default_factory=dict)
+    _names: list[list[frozenset[str]]] = field(default_factory=list)  # row_names per plan
 
     # --- Q of a node -------------------------------------------------------------------------
 
     def _rows(
-        self, plan_index: int, depth: int, values: Mapping[str, Any]
+        self,
+        plan_index: int,
+        depth: int,
+        values: Mapping[str, Any],
+        only: Collection[int] | None = None,
     ) -> list[tuple[str, list[Any | None], dict[str, Any]]]:
         return stream_rows(
             self.skeletons[plan_index],
@@ -222,7 +251,26 @@ class LearnedPolicy:
             fluents=self.fluents,
             static_context=self.static_context,
             start=depth,
+            only=only,
         )
+
+    def _stale(self, tree: Tree, node: Node, known: Collection[int]) -> list[int] | None:
+        """The streams (from the node's depth on) whose rows differ from its parent's, or None
+        when the parent's rows are not ``known``. The child binds one more stream; the rows of
+        the others read nothing it bound unless :func:`row_names` says so."""
+        if node.parent is None or node.parent not in known:
+            return None
+        parent = tree[node.parent]
+        if parent.plan_index != node.plan_index or node.depth != parent.depth + 1:
+            return None
+        if not self._names:
+            self._names = [
+                row_names(p, st, self.fluents)
+                for p, st in zip(self.skeletons, self.states, strict=True)
+            ]
+        names = self._names[node.plan_index]
+        new = set(node.outputs)
+        return [i for i in range(node.depth, len(names)) if names[i] & new]
 
     def _key(self, row: tuple[str, list[Any | None], dict[str, Any]]) -> str | None:
         """A query's identity: stream, inputs and the state that matters; None while an input
@@ -240,28 +288,54 @@ class LearnedPolicy:
         todo = [n for n in nodes if n.id not in self._q]
         if not todo:
             return
-        spans: list[tuple[Node, int, int]] = []
-        rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
-        for node in todo:
-            values = {**self.initial_values, **tree.bindings(node.id)}
-            mine = self._rows(node.plan_index, node.depth, values)
-            spans.append((node, len(rows), len(rows) + len(mine)))
-            rows += mine
-        costs = self.predictor.predict_rows(rows) if rows else []
+        # Only the rows a node's new binding changed are built and predicted, in one batch; the
+        # rest are its parent's, predicted before or earlier in this batch (parents come first).
+        # A kitchen-8 node has ~80 streams ahead, and its binding changes a few of their rows.
         if not self._reusable:
             self._reusable = [
                 reusable_streams(p, st, self.fluents)
                 for p, st in zip(self.skeletons, self.states, strict=True)
             ]
-        for node, lo, hi in spans:
-            ours = costs[lo:hi]
-            keys = [self._key(row) for row in rows[lo:hi]]
-            self._terms[node.id] = list(zip(keys, ours, strict=True))
-            reusable = self._reusable[node.plan_index][node.depth :]
-            self._idents[node.id] = [
-                query_identity(*row) if ok and all(v is not None for v in row[1]) else None
-                for row, ok in zip(rows[lo:hi], reusable, strict=True)
+        rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
+        reads: list[bool] = []  # per row: may its query's result be reused (reusable_streams)
+        slots: dict[int, list[int | _Entry]] = {}  # per node: a row of this batch, or an entry
+        todo = sorted(todo, key=lambda n: n.id)
+        for node in todo:
+            stale = self._stale(tree, node, self._entries.keys() | slots.keys())
+            reusable = self._reusable[node.plan_index]
+            values = {**self.initial_values, **tree.bindings(node.id)}
+            fresh = range(node.depth, len(reusable)) if stale is None else stale
+            at = dict(zip(fresh, range(len(rows), len(rows) + len(fresh)), strict=True))
+            rows += self._rows(
+                node.plan_index, node.depth, values, None if stale is None else stale
+            )
+            reads += [reusable[i] for i in fresh]
+            parent: Sequence[int | _Entry] = ()
+            if stale is not None and node.parent is not None:
+                parent = slots[node.parent] if node.parent in slots else self._entries[node.parent]
+            slots[node.id] = [
+                at[i] if i in at else parent[i - node.depth + 1]
+                for i in range(node.depth, len(reusable))
             ]
+        costs = self.predictor.predict_rows(rows) if rows else []
+        made: dict[int, _Entry] = {}
+
+        def entry(slot: int | _Entry) -> _Entry:
+            if not isinstance(slot, int):
+                return slot
+            if slot not in made:
+                row = rows[slot]
+                ok = reads[slot] and all(v is not None for v in row[1])
+                made[slot] = (self._key(row), costs[slot], query_identity(*row) if ok else None)
+            return made[slot]
+
+        for node in todo:
+            entries = [entry(slot) for slot in slots[node.id]]
+            self._entries[node.id] = entries
+            keys = [key for key, _, _ in entries]
+            ours = [cost for _, cost, _ in entries]
+            self._terms[node.id] = list(zip(keys, ours, strict=True))
+            self._idents[node.id] = [ident for _, _, ident in entries]
             if keys and keys[0] is not None:  # the node's children are attempts of this query
                 self._groups.setdefault(keys[0], []).append(node.id)
             self._bound[node.id] = sum(tree[i].execution_s for i in tree.path(node.id))

@@ -3,7 +3,9 @@ standing in for trained models on the pure-Python line domain."""
 
 from __future__ import annotations
 
+import json
 import time
+import zlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -86,7 +88,7 @@ class ReachOracle:
         return out
 
 
-def make(sink: ListSink) -> tuple[TreeSearch, LearnedPolicy]:
+def make(sink: ListSink, predictor: Any = None) -> tuple[TreeSearch, LearnedPolicy]:
     loaded, problem = problem_for_scene(SCENE, seed=3)
     plans = plan_abstract(loaded.domain, loaded.streams, problem, AbstractConfig(k=4)).plans
     states = [stream_contexts(p, loaded.domain, problem) for p in plans]
@@ -105,7 +107,7 @@ def make(sink: ListSink) -> tuple[TreeSearch, LearnedPolicy]:
         )
 
     policy = LearnedPolicy(
-        ReachOracle(),
+        predictor or ReachOracle(),
         plans,
         states,
         values,
@@ -141,6 +143,42 @@ def test_learned_search_solves_and_reports_predictions() -> None:
     path = search.tree.path(result.node_id or 0)[1:]
     qs = [policy.q(search.tree, search.tree[i]) for i in path]
     assert qs[-1] == 0.0 and qs[0] == max(qs)
+
+
+class RowHash:
+    """Predicts from every value of a row, inputs and context alike: a row that a node took
+    from its parent although its own binding changed it would show as a different prediction."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+
+    def predict_rows(
+        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
+    ) -> list[StreamCost]:
+        self.rows += len(rows)
+        out = []
+        for row in rows:
+            h = zlib.crc32(json.dumps(row, sort_keys=True, default=str).encode())
+            out.append(StreamCost(0.2 + 0.79 * (h % 1000) / 1000, 0.01, 0.02, 0.0))
+        return out
+
+
+def test_a_node_predicts_only_the_rows_its_binding_changed_and_they_match_a_full_recount() -> None:
+    search, policy = make(ListSink(), RowHash())
+    search.run(deadline=time.perf_counter() + 2)
+    tree, fresh = search.tree, RowHash()
+    predicted = [n for n in tree.nodes[1:] if n.id in policy._terms]
+    assert len(predicted) > 5
+    full = 0
+    for node in predicted:
+        values = {**policy.initial_values, **tree.bindings(node.id)}
+        rows = policy._rows(node.plan_index, node.depth, values)
+        full += len(rows)
+        assert policy._terms[node.id] == list(
+            zip([policy._key(r) for r in rows], fresh.predict_rows(rows), strict=True)
+        )
+    assert isinstance(policy.predictor, RowHash)
+    assert policy.predictor.rows < full  # some rows came from the parent's (50 of 66 here)
 
 
 def test_a_bad_binding_makes_querying_again_the_better_action() -> None:
