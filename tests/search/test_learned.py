@@ -67,8 +67,8 @@ def test_dead_ends_scale_the_rest_of_the_plan() -> None:
     assert q(crowded) > 5 * q(clear)  # ... and with dead ends it is the one to avoid
 
 
-class ReachOracle:
-    """Knows the line-reach rule: a pose beyond x = 2.25 fails the reach test."""
+class CountingPredictor:
+    """A hand-written predictor that counts the rows it was asked for."""
 
     def __init__(self) -> None:
         self.rows = 0
@@ -77,15 +77,25 @@ class ReachOracle:
         self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
     ) -> list[StreamCost]:
         self.rows += len(rows)
-        out = []
-        for stream, inputs, _ in rows:
-            if stream == "test-reachable" and isinstance(inputs[1], float):
-                out.append(StreamCost(1.0 if abs(inputs[1]) <= 2.25 else 0.0, 0.01, 0.01, 0.0))
-            elif stream == "test-reachable":
-                out.append(StreamCost(0.4, 0.01, 0.01, 0.0))  # unknown pose: 40% reachable
-            else:
-                out.append(StreamCost(1.0, 0.01, 0.01, 0.0))
-        return out
+        return [self.cost(*row) for row in rows]
+
+    def cost(
+        self, stream: str, inputs: Sequence[Any | None], context: Mapping[str, Any]
+    ) -> StreamCost:
+        raise NotImplementedError
+
+
+class ReachOracle(CountingPredictor):
+    """Knows the line-reach rule: a pose beyond x = 2.25 fails the reach test."""
+
+    def cost(
+        self, stream: str, inputs: Sequence[Any | None], context: Mapping[str, Any]
+    ) -> StreamCost:
+        if stream == "test-reachable" and isinstance(inputs[1], float):
+            return StreamCost(1.0 if abs(inputs[1]) <= 2.25 else 0.0, 0.01, 0.01, 0.0)
+        if stream == "test-reachable":
+            return StreamCost(0.4, 0.01, 0.01, 0.0)  # unknown pose: 40% reachable
+        return StreamCost(1.0, 0.01, 0.01, 0.0)
 
 
 def make(sink: ListSink, predictor: Any = None) -> tuple[TreeSearch, LearnedPolicy]:
@@ -145,22 +155,16 @@ def test_learned_search_solves_and_reports_predictions() -> None:
     assert qs[-1] == 0.0 and qs[0] == max(qs)
 
 
-class RowHash:
+class RowHash(CountingPredictor):
     """Predicts from every value of a row, inputs and context alike: a row that a node took
     from its parent although its own binding changed it would show as a different prediction."""
 
-    def __init__(self) -> None:
-        self.rows = 0
-
-    def predict_rows(
-        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
-    ) -> list[StreamCost]:
-        self.rows += len(rows)
-        out = []
-        for row in rows:
-            h = zlib.crc32(json.dumps(row, sort_keys=True, default=str).encode())
-            out.append(StreamCost(0.2 + 0.79 * (h % 1000) / 1000, 0.01, 0.02, 0.0))
-        return out
+    def cost(
+        self, stream: str, inputs: Sequence[Any | None], context: Mapping[str, Any]
+    ) -> StreamCost:
+        row = [stream, inputs, context]
+        h = zlib.crc32(json.dumps(row, sort_keys=True, default=str).encode())
+        return StreamCost(0.2 + 0.79 * (h % 1000) / 1000, 0.01, 0.02, 0.0)
 
 
 def test_a_node_predicts_only_the_rows_its_binding_changed_and_they_match_a_full_recount() -> None:
