@@ -290,7 +290,7 @@ class LearnedPolicy:
             return
         # Only the rows a node's new binding changed are built and predicted, in one batch; the
         # rest are its parent's, predicted before or earlier in this batch (parents come first).
-        # A kitchen-8 node has ~80 streams ahead, and its binding changes a few of their rows.
+        # A kitchen-8 plan has 72 streams, and a binding changes the rows of a few of them.
         if not self._reusable:
             self._reusable = [
                 reusable_streams(p, st, self.fluents)
