@@ -24,7 +24,6 @@ import random
 import statistics
 import sys
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import replace
 from typing import Any
 
 from planner.runs import PLANNERS, RunConfig, run
@@ -64,8 +63,7 @@ def _config(field: str, setting: str) -> Any:
     """The default ``SamplerConfig`` with ``field`` set from the text ``setting``."""
     from planner.domains.kitchen.samplers import SamplerConfig
 
-    default = getattr(SamplerConfig(), field)
-    return replace(SamplerConfig(), **{field: type(default)(setting)})
+    return SamplerConfig().with_text(field, setting)
 
 
 def _trial(
@@ -129,18 +127,15 @@ def main() -> int:
         parser.error("--seeds takes LO-HI or a,b,c (integers)")
     if not seeds or args.workers < 1 or args.budget <= 0:
         parser.error("need seeds, a positive budget and workers >= 1")
-    from planner.domains.kitchen.samplers import SamplerConfig
 
     settings = args.settings.split(",")
     if len(settings) < 2:
         parser.error("--settings takes two or more values, comma-separated")
-    if not isinstance(getattr(SamplerConfig(), args.field, None), str | int | float):
-        parser.error(f"--field {args.field!r} is not a text or number field of SamplerConfig")
     for setting in settings:
         try:
             _config(args.field, setting)
         except ValueError as exc:
-            parser.error(f"--settings {setting!r}: {exc}")
+            parser.error(f"--field {args.field!r} --settings {setting!r}: {exc}")
     logging.basicConfig(level=logging.WARNING)
     jobs = []
     for i, seed in enumerate(seeds):

@@ -19,7 +19,6 @@ import logging
 import random
 import sys
 from collections import Counter
-from dataclasses import replace
 from typing import Any
 
 from planner.runs import PLANNERS, RunConfig, run
@@ -41,13 +40,10 @@ def main() -> int:
     if args.field is not None:
         import planner.domains.kitchen.samplers as ks
 
-        default = getattr(ks.SamplerConfig(), args.field, None)
-        if not isinstance(default, str | int | float):
-            parser.error(f"--field {args.field!r} is not a text or number field of SamplerConfig")
         try:
-            config = replace(ks.SamplerConfig(), **{args.field: type(default)(args.value)})
+            config = ks.SamplerConfig().with_text(args.field, args.value)
         except ValueError as exc:
-            parser.error(f"--value {args.value!r}: {exc}")
+            parser.error(f"--field {args.field!r} --value {args.value!r}: {exc}")
         original = ks.KitchenSamplers.__init__
 
         def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:

@@ -13,7 +13,7 @@ import math
 import random
 from collections import Counter
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from planner.domains.kitchen import GEOMETRY_KEY
@@ -89,6 +89,15 @@ class SamplerConfig:
             raise ValueError(
                 f"unknown base_order {self.base_order!r} (known: {', '.join(BASE_ORDERS)})"
             )
+
+    def with_text(self, name: str, text: str) -> SamplerConfig:
+        """This config with its text or number field ``name`` set from ``text`` (as a command
+        line gives it); a ValueError says what is wrong."""
+        default = getattr(self, name, None)
+        if not isinstance(default, str | int | float):
+            raise ValueError(f"{name!r} is not a text or number field of SamplerConfig")
+        changes: dict[str, Any] = {name: type(default)(text)}
+        return replace(self, **changes)
 
 
 def _grasps(size: float, approach: float) -> list[Grasp]:
