@@ -22,6 +22,7 @@ import numpy as np
 
 from planner.experiment import Trial, TrialResult, run_trials, stderr_progress
 from planner.report import paired_improvement
+from planner.scene import SceneError, load_scene
 
 
 def _parse_seeds(text: str) -> list[int]:
@@ -56,7 +57,16 @@ def main() -> int:
     for m in models:
         if not Path(m).is_file():
             parser.error(f"--models: no such file: {m}")
-    seeds = _parse_seeds(args.seeds)
+    try:
+        seeds = _parse_seeds(args.seeds)
+    except ValueError:
+        parser.error("--seeds takes LO-HI or a,b,c (integers)")
+    if not seeds or args.workers < 1 or args.budget <= 0:
+        parser.error("need seeds, a positive --budget and --workers >= 1")
+    try:
+        load_scene(args.scene)
+    except SceneError as exc:
+        parser.error(f"--scene: {exc}")
     arms: list[tuple[str, str | None]] = [("baseline", None)]
     arms += [(f"learned:{i + 1}", m) for i, m in enumerate(models)]
     db = args.db or str(Path(tempfile.mkdtemp()) / "models.db")

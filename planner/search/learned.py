@@ -254,11 +254,12 @@ class LearnedPolicy:
             only=only,
         )
 
-    def _stale(self, tree: Tree, node: Node, known: Collection[int]) -> list[int] | None:
+    def _stale(self, tree: Tree, node: Node, pending: Collection[int]) -> list[int] | None:
         """The streams (from the node's depth on) whose rows differ from its parent's, or None
-        when the parent's rows are not ``known``. The child binds one more stream; the rows of
-        the others read nothing it bound unless :func:`row_names` says so."""
-        if node.parent is None or node.parent not in known:
+        when the parent's rows are neither predicted nor ``pending`` in this batch. The child
+        binds one more stream; the rows of the others read nothing it bound unless
+        :func:`row_names` says so."""
+        if node.parent is None or (node.parent not in self._entries and node.parent not in pending):
             return None
         parent = tree[node.parent]
         if parent.plan_index != node.plan_index or node.depth != parent.depth + 1:
@@ -301,7 +302,7 @@ class LearnedPolicy:
         slots: dict[int, list[int | _Entry]] = {}  # per node: a row of this batch, or an entry
         todo = sorted(todo, key=lambda n: n.id)
         for node in todo:
-            stale = self._stale(tree, node, self._entries.keys() | slots.keys())
+            stale = self._stale(tree, node, slots.keys())
             reusable = self._reusable[node.plan_index]
             values = {**self.initial_values, **tree.bindings(node.id)}
             fresh = range(node.depth, len(reusable)) if stale is None else stale
