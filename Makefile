@@ -33,7 +33,7 @@ pytest: $(STAMP) $(CHROMIUM)
 	$(BIN)/pytest -q
 
 serve: $(STAMP)
-	$(BIN)/tamp serve
+	$(BIN)/tamp serve --domain examples/tabletop2d
 
 bench-abstract: $(STAMP)
 	$(BIN)/python benchmarks/abstract_topk.py

@@ -9,10 +9,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Query, Request, WebSocket, WebSocketDisconnect
 from fastapi.concurrency import run_in_threadpool
 
-from app import catalog
 from app.hub import Ended, Lagged
 from app.manager import QueueFullError, RunNotLiveError
 from app.schemas import (
+    DomainOut,
     EventPage,
     Health,
     ModelOut,
@@ -68,8 +68,32 @@ def health(request: Request) -> Health:
 
 
 @router.get("/scenes")
-def scenes() -> list[SceneOut]:
-    return [SceneOut(**vars(s)) for s in catalog.scenes()]
+def scenes(request: Request) -> list[SceneOut]:
+    return [
+        SceneOut(
+            name=s.name, domain=s.domain, description=s.description, blocks=s.blocks, view=s.view
+        )
+        for s in _dash(request).domains.scenes()
+    ]
+
+
+@router.get("/domains")
+def domains(request: Request) -> list[DomainOut]:
+    dash = _dash(request)
+    counts: dict[str, int] = {}
+    for s in dash.domains.scenes():
+        counts[s.domain] = counts.get(s.domain, 0) + 1
+    return [
+        DomainOut(
+            name=d.name,
+            source=d.source,
+            loaded=d.error is None,
+            error=d.error,
+            description=d.description,
+            scenes=counts.get(d.name, 0),
+        )
+        for d in dash.domains.infos()
+    ]
 
 
 @router.get("/models")

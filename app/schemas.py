@@ -92,6 +92,16 @@ class SceneOut(BaseModel):
     domain: str
     description: str
     blocks: int
+    view: bool = Field(description="whether the domain has a 3D view")
+
+
+class DomainOut(BaseModel):
+    name: str
+    source: str = Field(description="how it was found: an entry point or a folder")
+    loaded: bool
+    error: str | None = Field(description="why it does not load (its scenes are not offered)")
+    description: str
+    scenes: int
 
 
 class ModelOut(BaseModel):

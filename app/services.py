@@ -38,7 +38,8 @@ class Dashboard:
                 "%d run(s) left unfinished by an earlier server are now 'interrupted'", interrupted
             )
         self.hub = EventHub(client_limit=settings.ws_queue_events)
-        self.models = catalog.Models(settings.model_dir)
+        self.domains = catalog.Domains(settings.extra_domains)
+        self.models = catalog.Models(settings.model_dir, self.domains)
         self.manager = RunManager(
             self.store,
             settings.database_url,
@@ -61,12 +62,16 @@ class Dashboard:
         self, scene: str, planner: str, seed: int, budget_s: float, model: str | None, k: int
     ) -> RunRecord:
         try:
-            scene_info = catalog.scene(scene)
+            scene_info = self.domains.scene(scene)
         except catalog.UnknownNameError as exc:
             raise RequestError("scene", str(exc)) from exc
         model_path: Path | None = None
+        name = model
         if planner == "learned":
-            name = model or "kitchen"
+            name = model or self.models.default_for(scene_info.domain)
+        elif model is not None:
+            raise RequestError("model", "a model is only used by the learned planner")
+        if name is not None:
             try:
                 model_path = self.models.path(name)
             except catalog.UnknownNameError as exc:
@@ -79,8 +84,7 @@ class Dashboard:
                     f"model {name!r} is for domain {fits.get(name)!r}, scene {scene!r} is "
                     f"{scene_info.domain!r} (models for it: {', '.join(fitting) or 'none'})",
                 )
-        elif model is not None:
-            raise RequestError("model", "a model is only used by the learned planner")
+        db = Path(self.settings.database_url)
         config = RunConfig(
             scene=scene,
             seed=seed,
@@ -88,10 +92,13 @@ class Dashboard:
             k=k,
             budget_s=budget_s,
             model=str(model_path) if model_path is not None else None,
+            domain=scene_info.domain_ref,
+            # Learned with no model for the domain: priors from the runs stored here.
+            priors_db=str(db) if planner == "learned" and model_path is None else None,
         )
         data = asdict(config)
         if model_path is not None:
-            data["model_name"] = model or "kitchen"
+            data["model_name"] = name
         run_id = self.manager.submit(config, data)
         return self.store.get_run(run_id)
 

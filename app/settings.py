@@ -7,7 +7,6 @@ from pathlib import Path
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from planner.runs import DEFAULT_MODEL
 from planner.store import default_db_path
 
 
@@ -17,7 +16,10 @@ class Settings(BaseSettings):
     host: str = "127.0.0.1"  # only this machine, unless the user asks otherwise
     port: int = Field(8000, ge=0, le=65535)
     database_url: str = Field(default_factory=lambda: str(default_db_path()))  # path or URL
-    model_dir: Path = DEFAULT_MODEL.parent  # model files (*.pt), offered by name
+    # Model files (*.pt) offered by name, besides every domain's shipped model.
+    model_dir: Path = Field(default_factory=lambda: default_db_path().parent / "models")
+    # Domain folders whose scenes are offered (tamp serve --domain); TAMP_DOMAINS also works.
+    extra_domains: list[Path] = Field(default_factory=list)
     reports_dir: Path = Field(default_factory=lambda: default_db_path().parent / "reports")
     viewer: bool = True  # start the viser 3D view
     viewer_port: int = Field(8080, ge=0, le=65535)

@@ -1,21 +1,22 @@
-"""The viser 3D view of a run: the PR2 kitchen, its search tree drawn where it means something,
-and the bound plan played by the robot.
+"""The viser 3D view of a run: the domain's scene, its search tree drawn where it means something,
+and the bound plan played in real time.
 
 The dashboard server makes one :class:`RunViewer` at start-up and calls it from ordinary threads:
 :meth:`RunViewer.show` resets the view to a run after the first ``k`` events (the page's step),
 :meth:`RunViewer.extend` adds live events of that run. Nothing it is given raises into the caller:
-bad data is logged and skipped. What is drawn (docs/viewer.md):
+bad data is logged and skipped. What is drawn (docs/viewer.md) comes from the domain's view hook
+(``DomainSpec.view``, :mod:`planner.view`); a domain without one gets the note "There is no 3D
+view for this domain":
 
-- the kitchen of the scene file: platforms, blocks at their seeded initial poses, the generated
-  PR2 (``scenes/pr2.urdf`` through :class:`viser.extras.ViserUrdf`) at its start configuration;
-- every successful sample as a ghost where it lies: placements as translucent blocks, grasps as
-  grippers around the block's initial pose, IK results as arrows at the base pose on the floor,
-  motions as the base's path; coloured by the node's predicted cost ``Q`` (green low, red high,
-  grey without a prediction); failed queries as red diamonds where they were about;
-- the tree's shape as a node-link drawing on a panel beyond the table, the solution's branch in
+- the scene's bodies (boxes, meshes, URDFs through :class:`viser.extras.ViserUrdf`) at their start
+  poses, with their labels;
+- every successful sample as the hook's markers (ghosts), in its layers, coloured by the node's
+  predicted cost ``Q`` (green low, red high, grey without a prediction); failed queries as red
+  diamonds where they were about;
+- the tree's shape as a node-link drawing on a panel beyond the scene, the solution's branch in
   blue;
-- once the events hold ``solution_found`` and the run's plan is given, the robot plays the plan in
-  real time (Play/Pause and a time slider in the GUI).
+- once the events hold ``solution_found`` and the run's plan file is given, the hook's timeline
+  plays (Play/Pause and a time slider in the GUI).
 """
 
 from __future__ import annotations
@@ -34,57 +35,106 @@ import numpy.typing as npt
 import viser
 from viser.extras import ViserUrdf
 
-from app.viewer_plan import PlanAnimation, RobotState, plan_animation
-from app.viewer_search import GHOST_KINDS, Ghost, GhostKind, SearchFold, tree_layout
-from planner.domains import problem_for_scene
-from planner.domains.kitchen import ARM, GEOMETRY_KEY
-from planner.domains.kitchen.geometry import KitchenGeometry
-from planner.domains.kitchen.plan_io import PlanFileError
-from planner.domains.kitchen.world import block_pose_to_pose
+from app.viewer_search import Ghost, SearchFold, tree_layout
+from planner.domains import LoadedDomain, problem_for_scene
+from planner.pddl.structs import Problem
+from planner.plans import PlanFileError, parse_plan
 from planner.scene import SceneError
-from planner.sim.pr2_model import (
-    ARM_JOINTS,
-    ARMS,
-    FINGER_TRAVEL,
-    GRIPPER_JOINTS,
-    REST_ARM_CONF,
-    ROOT_LINK,
-    TOOL_LINK,
-    TORSO_JOINT,
-    URDF_PATH,
-)
-from planner.sim.transforms import Pose, invert, multiply, planar_pose, to_wxyz
+from planner.sim.transforms import Pose, multiply, to_wxyz
+from planner.view import Body, BodyState, Box, SceneView, Timeline, Urdf, Vec3
 
 log = logging.getLogger(__name__)
 
 TICK_S = 1 / 20  # the animation and deferred redraws run at 20 Hz
 REDRAW_S = 0.25  # live events are drawn at most this often
 REDRAW_LOAD = 5  # and a redraw that took s seconds waits at least 5 s before the next
-MAX_GHOSTS = 2000  # ghosts drawn per kind (the latest); the GUI says when some are left out
-MAX_MOTIONS = 500  # motion paths drawn (the latest)
-GHOST_OPACITY = 0.45  # translucent placements and grippers
+MAX_GHOSTS = 2000  # ghosts drawn per layer (the latest); the GUI says when some are left out
+MAX_PATHS = 500  # paths drawn per layer (the latest)
+GHOST_OPACITY = 0.45  # translucent markers
 FAILED_RGB = (230, 20, 20)  # failed queries, in the scene and in the tree drawing
 SOLUTION_RGB = (40, 110, 230)  # the solution's branch in the tree drawing
 ROOT_RGB = (90, 90, 90)  # the tree's root
-PATH_Z = 0.02  # motion paths float this far above the floor
-ARROW_Z = 0.01  # base markers too
-PANEL_GAP = 1.0  # the tree drawing stands this far beyond the farthest fixture, metres
+PANEL_GAP = 1.0  # the tree drawing stands this far beyond the farthest body, metres
 PANEL_HEIGHT = 1.6  # its height, metres
 PANEL_TOP = 2.3  # the height of its root, metres
 PANEL_MIN_WIDTH = 2.4  # its least width, metres
 MAX_LEVEL_STEP = 0.3  # the most height between tree levels, metres
 SLIDER_STEP = 0.1  # seconds
+NO_VIEW = "There is no 3D view for this domain"
 
 
 @dataclass(frozen=True)
 class _Panel:
-    """Where the tree drawing stands: a vertical plane facing the robot's start."""
+    """Where the tree drawing stands: a vertical plane facing the scene's start."""
 
     x: float
     y_left: float  # the first leaf's y (the panel runs towards -y)
     width: float
     top: float
     height: float
+
+
+class _BodyView:
+    """One scene body in viser: a frame carrying its shape (a URDF's links below the frame)."""
+
+    def __init__(self, server: viser.ViserServer, body: Body) -> None:
+        self.body = body
+        self.urdf: Any = None
+        self.view: ViserUrdf | None = None
+        name = f"/scene/bodies/{body.name}"
+        scene = server.scene
+        shape = body.shape
+        self.frame = scene.add_frame(name, show_axes=False)
+        if isinstance(shape, Box):
+            scene.add_box(
+                f"{name}/shape",
+                color=body.color,
+                dimensions=shape.size,
+                opacity=body.opacity,
+            )
+        elif isinstance(shape, Urdf):
+            import yourdfpy  # type: ignore[import-untyped]  # ViserUrdf's URDF loader (viser[urdf])
+
+            self.urdf = yourdfpy.URDF.load(str(shape.path))
+            self.view = ViserUrdf(server, self.urdf, root_node_name=name)
+            self.joints: tuple[str, ...] = tuple(self.urdf.actuated_joint_names)
+        else:
+            import trimesh
+
+            mesh = trimesh.load(str(shape.path), force="mesh")
+            if not isinstance(mesh, trimesh.Trimesh):
+                raise ValueError(f"{shape.path} is not a single mesh")
+            scene.add_mesh_trimesh(f"{name}/shape", mesh, scale=shape.scale)
+        if body.label:
+            top = shape.size[2] / 2 + 0.05 if isinstance(shape, Box) else 0.3
+            scene.add_label(
+                f"{name}/label",
+                body.label,
+                position=(0.0, 0.0, top),
+                font_screen_scale=0.7,
+                anchor="bottom-center",
+            )
+        self.pose: Pose = (body.position, body.quat)
+        self.set(BodyState(body.position, body.quat, _urdf_joints(body)))
+
+    def set(self, state: BodyState) -> None:
+        self.pose = (state.position, state.quat)
+        self.frame.position = state.position
+        self.frame.wxyz = to_wxyz(state.quat)
+        self.frame.visible = state.visible
+        if self.view is not None and state.joints is not None:
+            self.view.update_cfg(np.array([state.joints.get(j, 0.0) for j in self.joints]))
+
+    def link_pose(self, link: str) -> Pose:
+        """A link's pose in the world (a URDF body's link; the body's own pose otherwise)."""
+        if self.urdf is None:
+            return self.pose
+        m = np.asarray(self.urdf.get_transform(link, self.urdf.base_link), dtype=np.float64)
+        return multiply(self.pose, _pose_from_matrix(m))
+
+
+def _urdf_joints(body: Body) -> Mapping[str, float] | None:
+    return body.shape.joints if isinstance(body.shape, Urdf) else None
 
 
 class RunViewer:
@@ -105,20 +155,20 @@ class RunViewer:
             self._plan_note = gui.add_markdown("No plan yet.")
         self._play.on_click(self._on_play)
         self._time.on_update(self._on_seek)
-        self._key: tuple[str, int] | None = None  # (scene, seed) whose kitchen is built
+        self._key: tuple[str, int, str | None] | None = None  # (scene, seed, domain) built
         self._scene = ""
         self._note = ""  # why there is no 3D view of the scene shown, if there is none
         self._steps = 0  # events shown of a scene without a 3D view
-        self._geometry: KitchenGeometry | None = None
+        self._loaded: LoadedDomain | None = None
+        self._problem: Problem | None = None
+        self._view: SceneView | None = None
         self._panel: _Panel | None = None
         self._fold: SearchFold | None = None
-        self._robot: _Robot | None = None
-        self._robot_failed = False  # the PR2 model could not be loaded (logged once)
+        self._bodies: dict[str, _BodyView] = {}
         self._groups: dict[str, viser.FrameHandle] = {}
         self._layers: dict[str, viser.SceneNodeHandle] = {}
-        self._blocks: dict[str, viser.BoxHandle] = {}
-        self._shown = _nothing_shown()  # instances drawn per layer, as counts names them
-        self._anim: PlanAnimation | None = None
+        self._shown: dict[str, int] = _nothing_shown()  # instances drawn, as counts names them
+        self._anim: Timeline | None = None
         self._plan: Mapping[str, Any] | None = None
         self._t = 0.0
         self._playing = False
@@ -141,7 +191,7 @@ class RunViewer:
     def counts(self) -> dict[str, int]:
         """What the view shows (anything not drawn yet is drawn first): events folded, tree
         nodes (the root included), failed queries and how many are marked in the scene, ghosts
-        of each kind drawn, ghosts left out by the caps, model predictions, malformed events
+        drawn per layer, ghosts left out by the caps, model predictions, malformed events
         skipped."""
         with self._lock:
             fold = self._fold
@@ -149,8 +199,8 @@ class RunViewer:
                 return {"events": self._steps, "nodes": 0, "failed": 0, "failed_marked": 0}
             if self._dirty:
                 self._draw()
-            total = sum(len(fold.ghosts[kind]) for kind in GHOST_KINDS)
-            drawn = sum(self._shown[name] for name in _COUNT_NAMES.values())
+            total = sum(len(g) for g in fold.ghosts.values())
+            drawn = sum(self._shown.get(layer, 0) for layer in fold.ghosts)
             return {
                 "events": fold.events,
                 "nodes": len(fold.nodes),
@@ -162,14 +212,20 @@ class RunViewer:
             }
 
     @property
+    def note(self) -> str:
+        """Why the scene shown has no 3D view ("" when it has one)."""
+        with self._lock:
+            return self._note
+
+    @property
     def plan_seconds(self) -> float | None:
-        """Duration of the plan being animated (its trajectories' seconds), None without one."""
+        """Duration of the plan being animated, None without one."""
         with self._lock:
             return None if self._anim is None else self._anim.duration
 
     @property
     def playhead(self) -> float:
-        """Seconds into the plan the robot is shown at."""
+        """Seconds into the plan the scene is shown at."""
         with self._lock:
             return self._t
 
@@ -179,15 +235,17 @@ class RunViewer:
         seed: int,
         events: Sequence[Mapping[str, Any]],
         plan: Mapping[str, Any] | None,
+        *,
+        domain: str | None = None,
     ) -> None:
         """Reset the view to this run: build the scene (if it changed) and draw the state after
         exactly ``events`` (the page's current step). ``plan`` is the run's bound plan file dict
-        when solved (else None)."""
+        when solved (else None); ``domain`` the run's domain reference (its folder, or None)."""
         with self._lock:
             if self._closed:
                 return
             try:
-                self._show(scene, seed, events, plan)
+                self._show(scene, seed, events, plan, domain)
             except Exception:
                 log.exception("viewer: could not show scene %r (seed %r)", scene, seed)
                 self._set_status(f"The 3D view could not show **{scene}**; see the server log.")
@@ -229,109 +287,86 @@ class RunViewer:
         seed: int,
         events: Sequence[Mapping[str, Any]],
         plan: Mapping[str, Any] | None,
+        domain: str | None,
     ) -> None:
-        if (scene, seed) != self._key:
-            self._load(scene, seed)
-        if self._geometry is None:
+        if (scene, seed, domain) != self._key:
+            self._load(scene, seed, domain)
+        if self._loaded is None or self._problem is None:
             self._steps = len(events)
             self._set_status(self._note_text())
             return
-        fold = SearchFold(self._geometry, seed)
+        fold = SearchFold(self._loaded, self._problem, self._loaded.spec.view)
         for event in events:
             fold.fold(event)
         self._fold = fold
         self._set_plan(scene, seed, plan)
         self._draw()
 
-    def _load(self, scene: str, seed: int) -> None:
-        """Forget what was built and build the kitchen of ``scene`` (or note why there is none)."""
+    def _load(self, scene: str, seed: int, domain: str | None) -> None:
+        """Forget what was built and build the scene (or note why there is none)."""
         for group in self._groups.values():
             group.remove()
         self._groups.clear()
         self._layers.clear()
-        self._blocks.clear()
+        self._bodies.clear()
         self._shown = _nothing_shown()
-        self._geometry = self._panel = self._fold = self._anim = self._plan = None
+        self._loaded = self._problem = self._view = None
+        self._panel = self._fold = self._anim = self._plan = None
         self._playing = False
         self._t = 0.0
         self._update_plan_gui()
-        self._key = (scene, seed)
+        self._key = (scene, seed, domain)
         self._scene = scene
         self._note = ""
         try:
-            loaded, problem = problem_for_scene(scene, seed=seed)
-            geometry = problem.values.get(GEOMETRY_KEY)
-            if isinstance(geometry, KitchenGeometry):
-                geometry.initial_poses(seed)  # a seed that places no block fails here
+            loaded, problem = problem_for_scene(scene, seed=seed, domain=domain)
         except (SceneError, OSError, TypeError, ValueError) as exc:
             log.warning("viewer: no 3D view of scene %r (seed %r): %s", scene, seed, exc)
             self._note = f"No 3D view: {exc}"
-            self._hide_robot()
             return
-        if not isinstance(geometry, KitchenGeometry):
-            self._note = f"There is no 3D view for the **{loaded.spec.name}** domain."
-            self._hide_robot()
+        hook = loaded.spec.view
+        if hook is None:
+            self._note = f"{NO_VIEW} (**{loaded.name}** describes no scene to draw)."
             return
-        self._geometry = geometry
-        self._build_kitchen(geometry)
+        try:
+            view = hook.scene(problem)
+        except (KeyError, TypeError, ValueError) as exc:
+            log.warning("viewer: the %s domain cannot describe %r: %s", loaded.name, scene, exc)
+            self._note = f"No 3D view: {exc}"
+            return
+        self._loaded, self._problem, self._view = loaded, problem, view
+        self._build(view)
 
-    def _build_kitchen(self, geometry: KitchenGeometry) -> None:
+    def _build(self, view: SceneView) -> None:
         scene = self._server.scene
-        for name in ("kitchen", "search", "tree"):
+        for name in ("scene", "search", "tree"):
             self._groups[name] = scene.add_frame(f"/{name}", show_axes=False)
-        xs = [x for p in geometry.platforms for x in p.footprint()[:2]] + [geometry.robot.base[0]]
-        ys = [y for p in geometry.platforms for y in p.footprint()[2:]] + [geometry.robot.base[1]]
-        cx, cy = (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
-        span = max(max(xs) - min(xs), max(ys) - min(ys)) + 3.0
+        lo, hi = _bounds(view.bodies)
+        cx, cy = (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2
+        span = max(hi[0] - lo[0], hi[1] - lo[1]) + 3.0
         scene.add_grid(
-            "/kitchen/floor",
+            "/scene/floor",
             width=span + PANEL_GAP * 2,
             height=span,
-            position=(cx + PANEL_GAP, cy, 0.0),
+            position=(cx + PANEL_GAP, cy, view.floor_z),
             cell_size=0.25,
             section_size=1.0,
             plane_color=(236, 236, 232),
             plane_opacity=0.0,
         )
-        for plat in geometry.platforms:
-            (px, py), (sx, sy, h) = plat.center, plat.size
-            scene.add_box(
-                f"/kitchen/platforms/{plat.name}",
-                color=_rgb(plat.color),
-                dimensions=(sx, sy, h),
-                position=(px, py, h / 2),
-            )
-            scene.add_label(
-                f"/kitchen/platforms/{plat.name}/label",
-                plat.name,
-                position=(0.0, 0.0, h / 2 + 0.05),
-                font_screen_scale=0.7,
-                anchor="bottom-center",
-            )
-        for block in geometry.blocks:
-            self._blocks[block.name] = scene.add_box(
-                f"/kitchen/blocks/{block.name}",
-                color=_rgb(block.color),
-                dimensions=(block.size,) * 3,
-            )
-        width = max(PANEL_MIN_WIDTH, max(ys) - min(ys))
-        self._panel = _Panel(max(xs) + PANEL_GAP, cy + width / 2, width, PANEL_TOP, PANEL_HEIGHT)
-        camera = self._server.initial_camera
-        camera.position = (min(xs) - 1.9, cy - 1.5, 2.4)
-        camera.look_at = (cx + 0.5, cy, 0.9)
-        if self._robot is None and not self._robot_failed:
+        for body in view.bodies:
             try:
-                self._robot = _Robot(self._server)
+                self._bodies[body.name] = _BodyView(self._server, body)
             except (ImportError, OSError, ValueError) as exc:
-                log.warning("viewer: cannot show the PR2 (%s); showing the kitchen without it", exc)
-                self._robot_failed = True
-        if self._robot is not None:
-            self._robot.frame.visible = True
-        self._pose_robot()
-
-    def _hide_robot(self) -> None:
-        if self._robot is not None:
-            self._robot.frame.visible = False
+                log.warning("viewer: cannot show body %s (%s); showing the rest", body.name, exc)
+        width = max(PANEL_MIN_WIDTH, hi[1] - lo[1])
+        self._panel = _Panel(hi[0] + PANEL_GAP, cy + width / 2, width, PANEL_TOP, PANEL_HEIGHT)
+        camera = self._server.initial_camera
+        if view.camera is not None:
+            camera.position, camera.look_at = view.camera
+        else:
+            camera.position = (lo[0] - 1.9, cy - 1.5, max(2.4, hi[2] + 1.5))
+            camera.look_at = (cx + 0.5, cy, (lo[2] + hi[2]) / 2)
 
     def _note_text(self) -> str:
         return f"**{self._scene}** · {self._steps} events\n\n{self._note}"
@@ -339,12 +374,15 @@ class RunViewer:
     # --- the plan ------------------------------------------------------------------------------
 
     def _set_plan(self, scene: str, seed: int, plan: Mapping[str, Any] | None) -> None:
-        fold, geometry = self._fold, self._geometry
-        anim: PlanAnimation | None = None
+        fold, loaded, problem = self._fold, self._loaded, self._problem
+        anim: Timeline | None = None
+        hook = loaded.spec.view if loaded is not None else None
         if (
             plan is not None
             and fold is not None
-            and geometry is not None
+            and hook is not None
+            and problem is not None
+            and loaded is not None
             and fold.solution is not None
         ):
             if plan.get("scene", scene) != scene or plan.get("seed", seed) != seed:
@@ -357,8 +395,10 @@ class RunViewer:
                 )
             else:
                 try:
-                    anim = plan_animation(plan, geometry, seed)
-                except PlanFileError as exc:
+                    parsed = parse_plan(dict(plan), "the run's plan")
+                    values = parsed.decoded_values(loaded)
+                    anim = hook.animate(parsed.actions, values, problem)
+                except (PlanFileError, KeyError, TypeError, ValueError) as exc:
                     log.warning("viewer: cannot animate the plan: %s", exc)
         if anim is None or self._anim is None or plan != self._plan:
             self._t = 0.0
@@ -366,7 +406,7 @@ class RunViewer:
         self._anim = anim
         self._plan = plan if anim is not None else None
         self._update_plan_gui()
-        self._pose_robot()
+        self._pose_bodies()
 
     def _update_plan_gui(self) -> None:
         anim = self._anim
@@ -406,7 +446,7 @@ class RunViewer:
             if self._anim is None or self._closed:
                 return
             self._t = min(max(0.0, float(self._time.value)), self._anim.duration)
-            self._pose_robot()
+            self._pose_bodies()
 
     def _advance(self, dt: float) -> None:
         anim = self._anim
@@ -418,7 +458,7 @@ class RunViewer:
             self._playing = False
             self._update_plan_gui()
         _set_slider(self._time, round(self._t, 3))
-        self._pose_robot()
+        self._pose_bodies()
 
     def _tick(self) -> None:
         last = time.perf_counter()
@@ -437,39 +477,35 @@ class RunViewer:
                     self._playing = False
             last = now
 
-    def _pose_robot(self) -> None:
-        """Put the robot and the blocks where the plan has them at the playhead (or at the
-        start without a plan)."""
-        geometry, robot = self._geometry, self._robot
-        if geometry is None or robot is None:
+    def _pose_bodies(self) -> None:
+        """Put every body where the plan has it at the playhead (at its start without a plan):
+        free bodies first, then those attached to a link of another."""
+        view = self._view
+        if view is None or not self._bodies:
             return
+        states: dict[str, BodyState] = {
+            b.name: BodyState(b.position, b.quat, _urdf_joints(b)) for b in view.bodies
+        }
         if self._anim is not None:
-            state = self._anim.state_at(self._t)
-        else:
-            state = RobotState(
-                geometry.robot.base,
-                geometry.robot.torso,
-                REST_ARM_CONF[ARM],
-                None,
-                geometry.initial_poses(self._key[1] if self._key else 0),
-            )
-        # Each finger opens up to FINGER_TRAVEL; holding, they close on the block's faces.
-        gripper = FINGER_TRAVEL
-        if state.held is not None:
-            gripper = min(FINGER_TRAVEL, geometry.block(state.held[0]).size / 2)
+            states.update(self._anim.at(self._t))
         with self._server.atomic():
-            tool = robot.set(state, gripper=gripper)
-            for name, box in self._blocks.items():
-                if state.held is not None and state.held[0] == name:
-                    pose = multiply(tool, invert(state.held[1].tool_in_block))
-                elif name in state.blocks:
-                    pose = block_pose_to_pose(state.blocks[name])
-                else:
-                    box.visible = False
+            attached = []
+            for name, state in states.items():
+                handle = self._bodies.get(name)
+                if handle is None:
                     continue
-                box.position = pose[0]
-                box.wxyz = to_wxyz(pose[1])
-                box.visible = True
+                if state.attached is not None:
+                    attached.append((handle, state))
+                else:
+                    handle.set(state)
+            for handle, state in attached:
+                assert state.attached is not None
+                parent_name, link, position, quat = state.attached
+                parent = self._bodies.get(parent_name)
+                if parent is None:
+                    continue
+                where = multiply(parent.link_pose(link), (position, quat))
+                handle.set(BodyState(where[0], where[1], state.joints, state.visible))
 
     # --- drawing the search --------------------------------------------------------------------
 
@@ -479,8 +515,8 @@ class RunViewer:
         start = time.perf_counter()
         if fold is not None:
             with self._server.atomic():
-                for kind in GHOST_KINDS:
-                    self._shown[_COUNT_NAMES[kind]] = self._draw_ghosts(fold, kind)
+                for layer, ghosts in fold.ghosts.items():
+                    self._shown[layer] = self._draw_layer(fold, layer, ghosts)
                 self._shown["failed_marked"] = self._draw_failures(fold)
                 self._shown["tree_nodes"] = self._draw_tree(fold)
             self._set_status(self._status_text(fold))
@@ -491,30 +527,28 @@ class RunViewer:
         self._drawn_at = start + max(0.0, REDRAW_LOAD * spent - REDRAW_S)
 
     @staticmethod
-    def _drawn(fold: SearchFold, kind: GhostKind) -> list[Ghost]:
-        cap = MAX_MOTIONS if kind == "motion" else MAX_GHOSTS
-        return fold.ghosts[kind][-cap:]
+    def _drawn(ghosts: list[Ghost]) -> list[Ghost]:
+        kind = ghosts[0].marker.kind if ghosts else "box"
+        return ghosts[-(MAX_PATHS if kind == "path" else MAX_GHOSTS) :]
 
-    @staticmethod
-    def _failure_points(fold: SearchFold) -> list[tuple[float, float, float]]:
-        return [f.where for f in fold.failures if f.where is not None][-MAX_GHOSTS:]
-
-    def _draw_ghosts(self, fold: SearchFold, kind: GhostKind) -> int:
-        """Draw the latest ghosts of one kind as one batch; returns how many."""
-        ghosts = self._drawn(fold, kind)
-        name = f"/search/{kind}s"
+    def _draw_layer(self, fold: SearchFold, layer: str, all_ghosts: list[Ghost]) -> int:
+        """Draw the latest ghosts of one layer as one batch; returns how many."""
+        name = f"/search/{layer}"
+        kind = all_ghosts[0].marker.kind if all_ghosts else None
+        ghosts = [g for g in self._drawn(all_ghosts) if g.marker.kind == kind]
         if not ghosts:
             self._drop(name)
             return 0
         colors = fold.colors([g.node_id for g in ghosts])
         scene = self._server.scene
-        if kind == "motion":
-            segments: list[tuple[tuple[float, float, float], tuple[float, float, float]]] = []
+        markers = [g.marker for g in ghosts]
+        if kind == "path":
+            segments: list[tuple[Vec3, Vec3]] = []
             seg_colors: list[npt.NDArray[np.uint8]] = []
-            for ghost, color in zip(ghosts, colors, strict=True):
-                pts = [(x, y, PATH_Z) for x, y, _ in ghost.path]
+            for marker, color in zip(markers, colors, strict=True):
+                pts = list(marker.points)
                 if len(pts) == 1:
-                    pts.append((pts[0][0] + 1e-3, pts[0][1], PATH_Z))
+                    pts.append((pts[0][0] + 1e-3, pts[0][1], pts[0][2]))
                 for a, b in itertools.pairwise(pts):
                     segments.append((a, b))
                     seg_colors.append(color)
@@ -522,14 +556,16 @@ class RunViewer:
             seg_rgb = np.repeat(np.array(seg_colors, dtype=np.uint8)[:, None, :], 2, axis=1)
             self._layers[name] = scene.add_line_segments(name, points, seg_rgb, thickness=0.012)
             return len(ghosts)
-        positions = np.array([g.pose[0] for g in ghosts], dtype=np.float32)
-        if kind == "conf":
-            positions[:, 2] = ARROW_Z
-        wxyzs = np.array([to_wxyz(g.pose[1]) for g in ghosts], dtype=np.float32)
-        vertices, faces = _MESHES[kind]
-        scales = (
-            np.array([g.size for g in ghosts], dtype=np.float32) if kind == "placement" else None
-        )
+        positions = np.array([m.position for m in markers], dtype=np.float32)
+        wxyzs = np.array([to_wxyz(m.quat) for m in markers], dtype=np.float32)
+        scales = None
+        if kind == "box":
+            vertices, faces = _UNIT_BOX
+            scales = np.array([m.size for m in markers], dtype=np.float32)
+        elif kind == "boxes":
+            vertices, faces = _boxes(*markers[0].parts)
+        else:
+            vertices, faces = _ARROW
         self._layers[name] = scene.add_batched_meshes_simple(
             name,
             vertices,
@@ -538,7 +574,7 @@ class RunViewer:
             positions,
             batched_scales=scales,
             batched_colors=colors,
-            opacity=GHOST_OPACITY if kind in ("placement", "grasp") else None,
+            opacity=GHOST_OPACITY if markers[0].translucent else None,
             side="double",
             cast_shadow=False,
             receive_shadow=False,
@@ -546,7 +582,7 @@ class RunViewer:
         return len(ghosts)
 
     def _draw_failures(self, fold: SearchFold) -> int:
-        points = self._failure_points(fold)
+        points = [f.where for f in fold.failures if f.where is not None][-MAX_GHOSTS:]
         name = "/search/failed"
         if not points:
             self._drop(name)
@@ -638,21 +674,22 @@ class RunViewer:
     # --- the GUI text --------------------------------------------------------------------------
 
     def _status_text(self, fold: SearchFold) -> str:
-        counts = {kind: len(fold.ghosts[kind]) for kind in GHOST_KINDS}
-        drawn = {kind: len(self._drawn(fold, kind)) for kind in GHOST_KINDS}
+        counts = {layer: len(g) for layer, g in fold.ghosts.items()}
+        drawn = {layer: len(self._drawn(g)) for layer, g in fold.ghosts.items()}
+        key = self._key
         lines = [
-            f"**{self._scene}** · seed {self._key[1] if self._key else 0} · "
+            f"**{self._scene}** · seed {key[1] if key else 0} · "
             f"step {fold.events - 1} ({fold.events} events)",
             f"nodes {len(fold.nodes)} · failed queries {fold.failed} · "
             f"predictions {len(fold.q)}" + (" · **solved**" if fold.solution is not None else ""),
-            f"ghosts: {counts['placement']} placements, {counts['grasp']} grasps, "
-            f"{counts['conf']} base poses, {counts['motion']} motions",
         ]
-        left_out = {k: counts[k] - drawn[k] for k in GHOST_KINDS if counts[k] > drawn[k]}
+        if counts:
+            lines.append("ghosts: " + ", ".join(f"{n} {layer}" for layer, n in counts.items()))
+        left_out = {k: counts[k] - drawn[k] for k in counts if counts[k] > drawn[k]}
         if left_out:
             lines.append(
                 "showing the latest "
-                + ", ".join(f"{drawn[k]} {k}s ({n} older hidden)" for k, n in left_out.items())
+                + ", ".join(f"{drawn[k]} {k} ({n} older hidden)" for k, n in left_out.items())
             )
         q = fold.q_range()
         scale = (
@@ -669,37 +706,24 @@ class RunViewer:
         _set_markdown(self._status, text)
 
 
-class _Robot:
-    """The generated PR2 in viser: a root frame at the base pose, the URDF's links below it."""
+def _bounds(bodies: Sequence[Body]) -> tuple[Vec3, Vec3]:
+    """The scene's extent: boxes by their corners, other bodies by their position."""
+    points: list[Vec3] = []
+    for b in bodies:
+        x, y, z = b.position
+        if isinstance(b.shape, Box):
+            sx, sy, sz = (v / 2 for v in b.shape.size)
+            points += [(x - sx, y - sy, z - sz), (x + sx, y + sy, z + sz)]
+        else:
+            points.append((x, y, z))
+    if not points:
+        return (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)
+    xs, ys, zs = zip(*points, strict=True)
+    return (min(xs), min(ys), min(zs)), (max(xs), max(ys), max(zs))
 
-    def __init__(self, server: viser.ViserServer) -> None:
-        import yourdfpy  # type: ignore[import-untyped]  # ViserUrdf's URDF loader (viser[urdf])
 
-        self._urdf = yourdfpy.URDF.load(str(URDF_PATH))
-        self.frame = server.scene.add_frame("/robot", show_axes=False)
-        self._view = ViserUrdf(server, self._urdf, root_node_name="/robot")
-        self._joints: tuple[str, ...] = tuple(self._urdf.actuated_joint_names)
-        self._rest: dict[str, float] = {
-            joint: value
-            for arm in ARMS
-            if arm != ARM
-            for joint, value in zip(ARM_JOINTS[arm], REST_ARM_CONF[arm], strict=True)
-        }
-
-    def set(self, state: RobotState, *, gripper: float) -> Pose:
-        """Show the robot in ``state``; returns the working arm's tool frame in the world."""
-        cfg = dict(self._rest)
-        cfg[TORSO_JOINT] = state.torso
-        cfg.update(zip(ARM_JOINTS[ARM], state.arm, strict=True))
-        cfg.update((joint, gripper) for joint in GRIPPER_JOINTS[ARM])
-        self._view.update_cfg(np.array([cfg.get(j, 0.0) for j in self._joints]))
-        base = planar_pose(*state.base)
-        self.frame.position = base[0]
-        self.frame.wxyz = to_wxyz(base[1])
-        tool = _pose_from_matrix(
-            np.asarray(self._urdf.get_transform(TOOL_LINK[ARM], ROOT_LINK), dtype=np.float64)
-        )
-        return multiply(base, tool)
+def _nothing_shown() -> dict[str, int]:
+    return {"failed_marked": 0, "tree_nodes": 0}
 
 
 # --- meshes of the ghosts (vertices, faces), side "double" so winding does not matter ------------
@@ -740,18 +764,6 @@ def _arrow() -> Mesh:
     return vertices, faces
 
 
-_COUNT_NAMES: dict[GhostKind, str] = {
-    "placement": "placements",
-    "grasp": "grasps",
-    "conf": "confs",
-    "motion": "motions",
-}
-
-
-def _nothing_shown() -> dict[str, int]:
-    return {**dict.fromkeys(_COUNT_NAMES.values(), 0), "failed_marked": 0, "tree_nodes": 0}
-
-
 _OCTAHEDRON: Mesh = (
     np.array(
         [(0.04, 0, 0), (-0.04, 0, 0), (0, 0.04, 0), (0, -0.04, 0), (0, 0, 0.05), (0, 0, -0.05)],
@@ -763,16 +775,8 @@ _OCTAHEDRON: Mesh = (
     ),
 )
 
-_MESHES: dict[GhostKind, Mesh] = {
-    "placement": _boxes(((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))),  # scaled by the block's edge
-    # The gripper in its tool frame: fingers along +x reaching 3 cm past the tool point.
-    "grasp": _boxes(
-        ((-0.115, 0.0, 0.0), (0.13, 0.10, 0.04)),
-        ((-0.01, 0.045, 0.0), (0.08, 0.012, 0.02)),
-        ((-0.01, -0.045, 0.0), (0.08, 0.012, 0.02)),
-    ),
-    "conf": _arrow(),
-}  # motions are line segments
+_UNIT_BOX = _boxes(((0.0, 0.0, 0.0), (1.0, 1.0, 1.0)))  # scaled by each marker's size
+_ARROW = _arrow()
 
 
 def _set_slider(slider: viser.GuiSliderHandle[float], value: float) -> None:
@@ -782,10 +786,6 @@ def _set_slider(slider: viser.GuiSliderHandle[float], value: float) -> None:
 def _set_markdown(handle: viser.GuiMarkdownHandle, text: str) -> None:
     if handle.content != text:
         handle.content = text
-
-
-def _rgb(color: Sequence[float]) -> tuple[int, int, int]:
-    return (int(color[0] * 255), int(color[1] * 255), int(color[2] * 255))
 
 
 def _pose_from_matrix(m: npt.NDArray[np.float64]) -> Pose:

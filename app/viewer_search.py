@@ -1,11 +1,11 @@
 """A run's search tree folded from its events into what the 3D view draws (no viser here).
 
 :class:`SearchFold` takes event dicts exactly as :func:`planner.events.event_to_dict` makes them,
-one at a time, and keeps the tree's shape, each node's predicted cost ``Q`` and, for the kitchen,
-where each sampled value lies in the world: a placement is a block pose, a grasp is a gripper
-pose at the block's initial pose, an IK result is a base pose on the floor, a motion is the path
-of the base. A failed query is kept with the place it was about (the input pose, configuration,
-platform or block). A malformed event is counted and skipped, never raised.
+one at a time, and keeps the tree's shape, each node's predicted cost ``Q`` and, when the domain
+has a 3D view (``DomainSpec.view``), the ghosts its hook draws for each successful sample
+(markers in named layers) and where each failed query was about. Query inputs and outputs are
+decoded with the domain's value types. A malformed event, or one the domain's hook cannot draw,
+is counted and skipped, never raised.
 """
 
 from __future__ import annotations
@@ -14,26 +14,19 @@ import logging
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry
-from planner.domains.kitchen.plan_io import PlanFileError, decode
-from planner.domains.kitchen.values import Conf, Grasp, Trajectory
-from planner.domains.kitchen.world import block_pose_to_pose
-from planner.sim.transforms import Pose, Vec3, multiply, planar_pose
+from planner.domains import LoadedDomain
+from planner.pddl.structs import Problem
+from planner.values import ValueDecodeError
+from planner.view import DomainView, Marker, QueryView, Vec3
 
 log = logging.getLogger(__name__)
 
-GhostKind = Literal["placement", "grasp", "conf", "motion"]
-GHOST_KINDS: tuple[GhostKind, ...] = ("placement", "grasp", "conf", "motion")
-
 WARN_SKIPPED = 5  # malformed events logged as warnings per fold; the rest at debug level
-FAILED_POSE_Z = 0.08  # a failed query about a block pose is marked this high above the block
-FAILED_CONF_Z = 0.05  # one about a configuration this high over its base
-FAILED_PLATFORM_Z = 0.03  # and one about a platform this far above its top face
 
 Q_LOW = np.array([46, 160, 67], dtype=np.float64)  # green: the lowest predicted cost seen
 Q_MID = np.array([235, 190, 30], dtype=np.float64)  # yellow: half way
@@ -43,13 +36,10 @@ NO_PREDICTION = (120, 120, 125)  # grey: no model prediction for the node (basel
 
 @dataclass(frozen=True)
 class Ghost:
-    """One sampled value drawn where it lies, belonging to tree node ``node_id``."""
+    """One marker of a sampled value, belonging to tree node ``node_id``."""
 
     node_id: int
-    kind: GhostKind
-    pose: Pose  # placement: block centre; grasp: tool frame; conf: base on the floor; motion: start
-    size: float = 0.0  # placement: the block's edge, metres
-    path: tuple[Vec3, ...] = ()  # motion: the base's path on the floor
+    marker: Marker
 
 
 @dataclass
@@ -71,22 +61,24 @@ class Failure:
 
 
 class SearchFold:
-    """The search of one kitchen run, built up event by event."""
+    """The search of one run, built up event by event; ``view`` draws its samples (None: the
+    tree alone)."""
 
-    def __init__(self, geometry: KitchenGeometry, seed: int) -> None:
-        self.geometry = geometry
-        self.initial = geometry.initial_poses(seed)
+    def __init__(
+        self, loaded: LoadedDomain, problem: Problem, view: DomainView | None = None
+    ) -> None:
+        self.loaded = loaded
+        self.problem = problem
+        self.view = view
         self.events = 0  # events folded, the malformed ones included
         self.skipped = 0  # malformed events
         self.nodes: dict[int, TreeNode] = {}
-        self.ghosts: dict[GhostKind, list[Ghost]] = {kind: [] for kind in GHOST_KINDS}
+        self.ghosts: dict[str, list[Ghost]] = {}  # layer -> ghosts, in order
         self.failures: list[Failure] = []
         self.q: dict[int, float] = {}  # node id -> predicted remaining seconds (learned planner)
         self.solution: int | None = None  # the node that binds the whole plan, once found
         self._pending: dict[int, Mapping[str, Any]] = {}  # stream_queried by the node it made
         self._effective: dict[int, float | None] | None = None  # _effective_q until next fold
-        self._blocks = {b.name: b for b in geometry.blocks}
-        self._platforms = {p.name: p for p in geometry.platforms}
 
     # --- folding -------------------------------------------------------------------------------
 
@@ -107,10 +99,21 @@ class SearchFold:
                 self.q[_int(event["node_id"])] = q
             elif kind == "solution_found":
                 self.solution = _int(event["node_id"])
-        except (AttributeError, KeyError, TypeError, ValueError, PlanFileError) as exc:
+        except (AttributeError, KeyError, TypeError, ValueError, IndexError) as exc:
             self.skipped += 1
             level = logging.WARNING if self.skipped <= WARN_SKIPPED else logging.DEBUG
             log.log(level, "viewer: skipped a malformed event (%s): %s", _describe(event), exc)
+
+    def _inputs(self, query: Mapping[str, Any] | None) -> tuple[Any, ...]:
+        if query is None:
+            return ()
+        out = []
+        for i, raw in enumerate(query.get("inputs", ())):
+            try:
+                out.append(self.loaded.decode(raw, f"input {i}"))
+            except ValueDecodeError:
+                out.append(None)  # a value the domain cannot read tells nothing about the place
+        return tuple(out)
 
     def _node_added(self, event: Mapping[str, Any]) -> None:
         node_id = _int(event["node_id"])
@@ -134,77 +137,32 @@ class SearchFold:
         failure: Failure | None = None
         ghosts: list[Ghost] = []
         if stream is not None and not success:
-            failure = Failure(node_id, str(stream), self._where(query))
+            where = None
+            if self.view is not None:
+                where = self.view.failure_at(
+                    QueryView(str(stream), self._inputs(query)), self.problem
+                )
+            failure = Failure(node_id, str(stream), where)
         elif stream is not None:
-            block = self._block_of(query)
             outputs = event["outputs"]
             if not isinstance(outputs, list):
                 raise TypeError(f"outputs must be a list, got {type(outputs).__name__}")
-            for raw in outputs:
-                ghost = self._ghost(node_id, decode(raw, f"node {node_id} output"), block)
-                if ghost is not None:
-                    ghosts.append(ghost)
+            if self.view is not None:
+                values = tuple(
+                    self.loaded.decode(raw, f"node {node_id} output {i}")
+                    for i, raw in enumerate(outputs)
+                )
+                drawn = self.view.markers(
+                    QueryView(str(stream), self._inputs(query), values), self.problem
+                )
+                ghosts = [Ghost(node_id, m) for m in drawn]
         self.nodes[node_id] = TreeNode(node_id, parent_id, level, success)
         if parent is not None:
             self.nodes.setdefault(parent.node_id, parent).children.append(node_id)
         if failure is not None:
             self.failures.append(failure)
         for ghost in ghosts:
-            self.ghosts[ghost.kind].append(ghost)
-
-    def _ghost(self, node_id: int, value: Any, block: str | None) -> Ghost | None:
-        if isinstance(value, BlockPose):
-            size = self._blocks[block].size if block else self.geometry.blocks[0].size
-            return Ghost(node_id, "placement", block_pose_to_pose(value), size)
-        if isinstance(value, Grasp):
-            if block is None:
-                return None
-            at = block_pose_to_pose(self.initial[block])
-            return Ghost(node_id, "grasp", multiply(at, value.tool_in_block))
-        if isinstance(value, Conf):
-            return Ghost(node_id, "conf", planar_pose(*value.base))
-        if isinstance(value, Trajectory):
-            path = _base_path(value)
-            start = (path[0][0], path[0][1], 0.0)
-            return Ghost(node_id, "motion", (start, (0.0, 0.0, 0.0, 1.0)), path=path)
-        return None
-
-    def _block_of(self, query: Mapping[str, Any] | None) -> str | None:
-        """The block a query was about (its first input naming a block)."""
-        if query is None:
-            return None
-        for raw in query.get("inputs", ()):
-            if isinstance(raw, str) and raw in self._blocks:
-                return raw
-        return None
-
-    def _where(self, query: Mapping[str, Any] | None) -> Vec3 | None:
-        """Where a failed query was about: its input pose, else the configuration it was to
-        reach, else the platform, else the block at its initial pose."""
-        if query is None:
-            return None
-        values = []
-        for raw in query.get("inputs", ()):
-            try:
-                values.append(decode(raw, "query input"))
-            except PlanFileError:
-                continue  # a malformed input tells nothing about the place
-        for v in values:
-            if isinstance(v, BlockPose):
-                return (v.x, v.y, v.z + FAILED_POSE_Z)
-        confs = [v for v in values if isinstance(v, Conf)]
-        if confs:
-            x, y, _ = confs[-1].base
-            return (x, y, FAILED_CONF_Z)
-        for v in values:
-            if isinstance(v, str) and v in self._platforms:
-                plat = self._platforms[v]
-                return (plat.center[0], plat.center[1], plat.top + FAILED_PLATFORM_Z)
-        for v in values:
-            if isinstance(v, str) and v in self.initial:
-                p = self.initial[v]
-                return (p.x, p.y, p.z + FAILED_POSE_Z)
-        return None
+            self.ghosts.setdefault(ghost.marker.layer, []).append(ghost)
 
     # --- reading -------------------------------------------------------------------------------
 
@@ -293,19 +251,6 @@ def tree_layout(nodes: Mapping[int, TreeNode]) -> dict[int, tuple[float, int]]:
                 stack.extend((c, False) for c in reversed(kids))
     scale = 1.0 / (len(leaves) - 1) if len(leaves) > 1 else 0.0
     return {n: (a * scale if len(leaves) > 1 else 0.5, nodes[n].level) for n, a in across.items()}
-
-
-def _base_path(traj: Trajectory) -> tuple[Vec3, ...]:
-    """The base's positions along a trajectory, on the floor, without repeats."""
-    points: list[Vec3] = []
-    for seg in traj.segments:
-        for x, y, _ in seg.base:
-            if not points or math.dist(points[-1][:2], (x, y)) > 1e-9:
-                points.append((x, y, 0.0))
-    if not points:
-        x, y, _ = traj.start.base
-        points.append((x, y, 0.0))
-    return tuple(points)
 
 
 def _int(value: Any) -> int:

@@ -23,7 +23,15 @@ class Viewer(Protocol):
     @property
     def url(self) -> str: ...
 
-    def show(self, scene: str, seed: int, events: Any, plan: dict[str, Any] | None) -> None: ...
+    def show(
+        self,
+        scene: str,
+        seed: int,
+        events: Any,
+        plan: dict[str, Any] | None,
+        *,
+        domain: str | None = None,
+    ) -> None: ...
 
     def extend(self, events: Any) -> None: ...
 
@@ -63,7 +71,9 @@ class ViewerService:
             assert self.viewer is not None
             plan = self.store.get_run(run_id).plan
             self._last_seq = events[-1]["seq"] if events else -1
-            self.viewer.show(record.scene, record.seed, events, plan)
+            ref = record.config.get("domain")
+            domain = ref if isinstance(ref, str) else None
+            self.viewer.show(record.scene, record.seed, events, plan, domain=domain)
 
         self._jobs.put(job)
 

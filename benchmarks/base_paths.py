@@ -37,8 +37,8 @@ import numpy as np
 from ompl import geometric as og
 from shortcut import _ratio, _seconds, solved_trials
 
+from planner.domains import load_domain
 from planner.domains.kitchen.geometry import BlockPose, geometry_from_scene
-from planner.domains.kitchen.plan_io import decode
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig, _base_duration
 from planner.domains.kitchen.values import Conf, Grasp, Trajectory
 from planner.scene import load_scene
@@ -55,7 +55,8 @@ Move = tuple[dict[str, BlockPose], tuple[str, Grasp] | None, BaseConf, BaseConf,
 
 def plan_moves(plan: dict[str, Any], initial: dict[str, BlockPose]) -> Iterator[Move]:
     """The base moves of a stored plan, each with the world as it is when the robot makes it."""
-    values = {name: decode(v, name) for name, v in plan.get("values", {}).items()}
+    kitchen = load_domain("kitchen")
+    values = {name: kitchen.decode(v, name) for name, v in plan.get("values", {}).items()}
     poses = dict(initial)
     held: tuple[str, Grasp] | None = None
     for text in plan.get("actions", []):

@@ -20,12 +20,14 @@ from collections import Counter
 
 from sqlalchemy import text
 
+from planner.domains import load_domain
 from planner.domains.kitchen.geometry import BlockPose, geometry_from_scene
-from planner.domains.kitchen.plan_io import decode
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig
 from planner.domains.kitchen.values import Conf, Grasp
 from planner.scene import load_scene
 from planner.store import RunStore
+
+decode = load_domain("kitchen").decode  # the kitchen's value types
 
 
 def main() -> int:

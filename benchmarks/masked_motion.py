@@ -12,8 +12,9 @@ import sys
 
 import numpy as np
 
+from planner.domains import load_domain
+from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
-from planner.runs import DEFAULT_MODEL
 from planner.store import RunStore
 
 
@@ -24,7 +25,7 @@ def main() -> int:
     parser.add_argument("--long", type=float, default=9.0, help="seconds from which a move is long")
     args = parser.parse_args()
     try:
-        model = CostModel.load(args.model)
+        model = CostModel.load(args.model, domain=load_domain("kitchen"))
     except (OSError, ValueError) as exc:
         print(f"cannot load model {args.model}: {exc}", file=sys.stderr)
         return 2

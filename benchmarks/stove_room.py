@@ -15,10 +15,11 @@ import sys
 
 import numpy as np
 
-from planner.learning.features import room_left
+from planner.domains import load_domain
+from planner.domains.kitchen import MODEL as DEFAULT_MODEL
+from planner.domains.kitchen.features import room_left
 from planner.learning.model import CostModel
 from planner.learning.train import auc, load_records, split_runs
-from planner.runs import DEFAULT_MODEL
 
 
 def main() -> int:
@@ -30,7 +31,7 @@ def main() -> int:
     parser.add_argument("--all", action="store_true", help="count the training trials too")
     args = parser.parse_args()
     try:
-        model = CostModel.load(args.model)
+        model = CostModel.load(args.model, domain=load_domain("kitchen"))
         records = load_records([args.db])
     except (OSError, ValueError) as exc:
         print(f"cannot load: {exc}", file=sys.stderr)

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from planner import __version__
-from planner.domains import problem_for_scene
+from planner.domains import LoadedDomain, problem_for_scene
 from planner.experiment import Trial, TrialResult, run_trials
-from planner.runs import DEFAULT_MODEL, ORDERS, PLANNERS, RunConfig
+from planner.runs import ORDERS, PLANNERS, RunConfig
 from planner.store import BenchTrialRecord, RunStore
 
 log = logging.getLogger(__name__)
@@ -39,8 +39,9 @@ class BenchConfig:
     planners: tuple[str, ...]
     seeds: tuple[int, ...]
     budget_s: float
-    model: str | None = None  # model file of the learned planner (default: the shipped one)
+    model: str | None = None  # model file of the learned planner (default: the domain's own)
     order: str = "auto"  # stream order of every planner (RunConfig.order)
+    domain: str | None = None  # the domain's name or folder (RunConfig.domain)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -50,6 +51,7 @@ class BenchConfig:
             "budget_s": self.budget_s,
             "model": self.model,
             "order": self.order,
+            "domain": self.domain,
         }
 
     @classmethod
@@ -61,6 +63,7 @@ class BenchConfig:
             budget_s=float(data["budget_s"]),
             model=data.get("model"),
             order=str(data.get("order", "auto")),  # benchmarks before --order: auto
+            domain=data.get("domain"),
         )
 
     def uses_model(self, planner: str) -> bool:
@@ -77,8 +80,10 @@ def make_config(
     budget_s: float,
     model: str | None = None,
     order: str = "auto",
+    domain: str | None = None,
 ) -> BenchConfig:
-    """A checked configuration; :class:`BenchError` names what is wrong."""
+    """A checked configuration; :class:`BenchError` names what is wrong. A learned planner with
+    no ``model`` takes the domain's own model, or runs on per-stream priors when it has none."""
     names = tuple(p.strip() for p in planners if p.strip())
     unknown = [p for p in names if p not in PLANNERS]
     if not names or unknown:
@@ -102,16 +107,27 @@ def make_config(
             "--model is only used by the learned planner or --order model, neither is asked"
         )
     if needs_model and model is None:
-        model = str(DEFAULT_MODEL)
+        own = _scene_domain(scene, domain).spec.model
+        model = None if own is None else str(own)
     return BenchConfig(
-        scene, names, tuple(range(seed_start, seed_start + trials)), float(budget_s), model, order
+        scene,
+        names,
+        tuple(range(seed_start, seed_start + trials)),
+        float(budget_s),
+        model,
+        order,
+        domain,
     )
+
+
+def _scene_domain(scene: str, domain: str | None) -> LoadedDomain:
+    return problem_for_scene(scene, domain=domain)[0]
 
 
 def check(config: BenchConfig) -> dict[str, Any]:
     """Everything that can fail before a trial starts; returns what the report shows about the
     model (its file and the seeds that trained it)."""
-    loaded, _ = problem_for_scene(config.scene)  # SceneError for an unknown scene
+    loaded = _scene_domain(config.scene, config.domain)  # SceneError for an unknown scene
     for planner in config.planners:
         try:
             RunConfig(
@@ -122,10 +138,16 @@ def check(config: BenchConfig) -> dict[str, Any]:
     info: dict[str, Any] = {"model": None, "training_seeds": None}
     if not any(config.uses_model(p) for p in config.planners):
         return info
+    if config.model is None:
+        log.warning(
+            "no model for domain %r: the learned planner runs on per-stream priors from the "
+            "queries recorded in the benchmark's store",
+            loaded.name,
+        )
+        return info
     from planner.learning.model import CostModel
 
-    assert config.model is not None
-    model = CostModel.load(config.model, domain=loaded.spec.name)  # ModelError: other domain
+    model = CostModel.load(config.model, domain=loaded)  # ModelError: other domain
     trained: dict[str, list[int]] | None = model.metadata.get("training_seeds")
     info = {"model": config.model, "model_sha256": _sha256(config.model), "training_seeds": trained}
     if trained is None:
@@ -172,16 +194,18 @@ def _sha256(path: str | Path) -> str:
 
 def locate_model(config: BenchConfig, sha256: str | None) -> BenchConfig:
     """The benchmark's model file when it is resumed: the recorded path if its content is
-    unchanged, else the shipped model if that is the same file (a benchmark started from another
-    checkout); a model that changed or is gone is refused, so one benchmark never mixes two."""
+    unchanged, else the domain's shipped model if that is the same file (a benchmark started
+    from another checkout); a model that changed or is gone is refused, so one benchmark never
+    mixes two."""
     if config.model is None or sha256 is None:
         return config  # not learned, or recorded before models were hashed
     recorded = Path(config.model)
     if recorded.is_file() and _sha256(recorded) == sha256:
         return config
-    if DEFAULT_MODEL.is_file() and _sha256(DEFAULT_MODEL) == sha256:
-        log.info("model %s: using the identical shipped model %s", config.model, DEFAULT_MODEL)
-        return replace(config, model=str(DEFAULT_MODEL))
+    shipped = _scene_domain(config.scene, config.domain).spec.model
+    if shipped is not None and shipped.is_file() and _sha256(shipped) == sha256:
+        log.info("model %s: using the identical shipped model %s", config.model, shipped)
+        return replace(config, model=str(shipped))
     state = "has changed" if recorded.is_file() else "is gone"
     raise BenchError(
         f"the benchmark's model {config.model} {state} (it started with sha256 {sha256[:12]}), "
@@ -197,7 +221,11 @@ def trial_order(config: BenchConfig) -> list[Trial]:
         planners = config.planners if i % 2 == 0 else tuple(reversed(config.planners))
         for planner in planners:
             model = config.model if config.uses_model(planner) else None
-            out.append(Trial(config.scene, seed, planner, config.budget_s, model, config.order))
+            out.append(
+                Trial(
+                    config.scene, seed, planner, config.budget_s, model, config.order, config.domain
+                )
+            )
     return out
 
 

@@ -25,11 +25,20 @@ from planner.abstract import (
     replay,
 )
 from planner.abstract.topk import DEFAULT_TOPK
-from planner.domains import get_domain, known_domains, problem_for_scene
-from planner.domains.kitchen.plan_io import PlanFileError
+from planner.domains import (
+    DomainLoadError,
+    LoadedDomain,
+    domain_infos,
+    known_domains,
+    load_domain,
+    problem_for_scene,
+    scene_domain,
+    scene_refs,
+)
 from planner.pddl import PDDLError, Problem
-from planner.runs import DEFAULT_PLANNER, PLANNERS
-from planner.scene import SceneError, known_scenes
+from planner.planners import DEFAULT_PLANNER, PLANNERS
+from planner.plans import PlanFileError
+from planner.scene import SceneError
 from planner.streams import StreamBindingError
 
 log = logging.getLogger("tamp")
@@ -37,6 +46,7 @@ log = logging.getLogger("tamp")
 # Errors a user can cause; they are reported in one line, without a traceback.
 USER_ERRORS = (
     PDDLError,
+    DomainLoadError,
     PlanFileError,
     SceneError,
     AbstractPlanningError,
@@ -76,6 +86,12 @@ def _positive(text: str) -> float:
     return value
 
 
+DOMAIN_HELP = (
+    "the domain: an installed domain's name or the path of a domain folder "
+    '(default: the scene file\'s "domain")'
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tamp", description="guided-tamp: task and motion planning that learns where to search"
@@ -91,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     src = ab.add_mutually_exclusive_group(required=True)
     src.add_argument("--scene", help="scene name (see `tamp scenes`) or path to a scene .json")
     src.add_argument("--problem", help="path to a PDDL problem file (needs --domain)")
-    ab.add_argument("--domain", help=f"domain for --problem ({', '.join(known_domains())})")
+    ab.add_argument("--domain", help=DOMAIN_HELP)
     ab.add_argument("--k", type=_k, default=50, help="unique skeletons wanted (default 50)")
     ab.add_argument(
         "--planner",
@@ -110,7 +126,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="plan a scene: skeletons, then bind their streams with the real samplers",
         description="Plan a scene end to end and report planning and execution seconds.",
     )
-    pl.add_argument("--scene", required=True, help="scene name (see `tamp scenes`)")
+    pl.add_argument("--scene", required=True, help="scene name (see `tamp scenes`) or path")
+    pl.add_argument("--domain", help=DOMAIN_HELP)
     pl.add_argument("--seed", type=int, default=0, help="scene randomisation and sampler seed")
     pl.add_argument("--planner", choices=PLANNERS, default=DEFAULT_PLANNER, help="planner")
     pl.add_argument("--k", type=_k, default=50, help="skeletons from top-k (default 50)")
@@ -122,7 +139,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     pl.add_argument("--no-record", action="store_true", help="do not record the run")
 
-    pl.add_argument("--model", help="model file for --planner learned (default: shipped model)")
+    pl.add_argument(
+        "--model",
+        help="model file for --planner learned (default: the domain's own; without one, "
+        "per-stream priors from the queries in --db)",
+    )
     pl.add_argument("--c-explore", type=float, help="learned: UCT exploration weight")
     pl.add_argument(
         "--order",
@@ -137,7 +158,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="run many recorded trials (training data)",
         description="Run trials of one scene on a process pool; every stream query is stored.",
     )
-    co.add_argument("--scene", required=True)
+    co.add_argument("--scene", required=True, help="scene name or path")
+    co.add_argument("--domain", help=DOMAIN_HELP)
     co.add_argument("--planner", choices=PLANNERS, default=DEFAULT_PLANNER)
     co.add_argument("--trials", type=_count, default=100, help="number of seeds (default 100)")
     co.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
@@ -152,13 +174,16 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run paired trials (same seeds for every planner, interleaved), store every "
         "run, and resume an interrupted benchmark with --resume. Then: tamp report BENCH_ID.",
     )
-    be.add_argument("--scene", help="scene name (required unless --resume)")
+    be.add_argument("--scene", help="scene name or path (required unless --resume)")
+    be.add_argument("--domain", help=DOMAIN_HELP)
     be.add_argument("--planners", default="baseline,learned", help="comma-separated")
     be.add_argument("--trials", type=int, default=20, help="seeds (default 20)")
     be.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")
     be.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
     be.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
-    be.add_argument("--model", help="model file for the learned planner (default: shipped)")
+    be.add_argument(
+        "--model", help="model file for the learned planner (default: the domain's own)"
+    )
     be.add_argument(
         "--order",
         choices=("auto", "plan", "model"),
@@ -185,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Fit P_S, R_S, R_F, R_M per stream; prints validation AUC and errors.",
     )
     tr.add_argument("--db", type=Path, action="append", required=True, help="run store(s)")
+    tr.add_argument(
+        "--domain", help="train for this domain (name or folder; default: the one in the stores)"
+    )
     tr.add_argument("--out", type=Path, required=True, help="model file to write")
     tr.add_argument("--seed", type=int, default=0)
     tr.add_argument("--epochs", type=_count, default=300)
@@ -192,15 +220,19 @@ def build_parser() -> argparse.ArgumentParser:
 
     va = sub.add_parser("validate", help="replay a bound plan in simulation")
     va.add_argument("plan", type=Path, help="a plan file written by `tamp plan --out`")
+    va.add_argument("--domain", help="the plan's domain, if not where the plan file says")
 
     re = sub.add_parser("render", help="render a scene to a PNG, headless")
     re.add_argument("--scene", required=True)
+    re.add_argument("--domain", help=DOMAIN_HELP)
     re.add_argument("--seed", type=int, default=0)
-    re.add_argument("--out", type=Path, default=Path("kitchen.png"))
+    re.add_argument("--out", type=Path, default=Path("scene.png"))
     re.add_argument("--width", type=int, default=960)
     re.add_argument("--height", type=int, default=720)
 
-    sub.add_parser("scenes", help="list the known scenes")
+    sc = sub.add_parser("scenes", help="list the known scenes and their domains")
+    sc.add_argument("--domain", action="append", help="also this domain folder's scenes")
+    sub.add_parser("domains", help="list the installed domains (and why any does not load)")
     se = sub.add_parser(
         "serve",
         help="start the dashboard",
@@ -216,7 +248,21 @@ def build_parser() -> argparse.ArgumentParser:
     se.add_argument("--max-queued", type=int, help="runs waiting for a slot (default 20)")
     se.add_argument("--models", type=Path, help="directory of model files offered by name")
     se.add_argument("--reports", type=Path, help="directory of benchmark reports (*.html)")
+    se.add_argument(
+        "--domain",
+        action="append",
+        metavar="PATH",
+        help="a domain folder whose scenes the dashboard offers (repeatable)",
+    )
     return parser
+
+
+def _domain_ref(loaded: LoadedDomain, given: str | None) -> str | None:
+    """What a run records of its domain: the folder of one loaded from a path (so any process
+    finds it again), the name given, or None (the scene file says)."""
+    if loaded.source.startswith("folder "):
+        return str(loaded.directory)
+    return given
 
 
 def _plan_json(rank: int, plan: AbstractPlan, problem: Problem, domain: Any) -> dict[str, Any]:
@@ -264,14 +310,14 @@ def _summary(result: AbstractResult) -> dict[str, Any]:
 
 def cmd_abstract(args: argparse.Namespace) -> int:
     if args.scene:
-        if args.domain:
-            raise ValueError("--domain goes with --problem; a scene names its own domain")
-        loaded, problem = problem_for_scene(args.scene)
+        loaded, problem = problem_for_scene(args.scene, domain=args.domain)
         name = args.scene
     else:
         if not args.domain:
-            raise ValueError(f"--problem needs --domain ({', '.join(known_domains())})")
-        loaded = get_domain(args.domain)
+            raise ValueError(
+                f"--problem needs --domain ({', '.join(known_domains())}, or a domain folder)"
+            )
+        loaded = load_domain(args.domain)
         problem = loaded.problem_from_file(args.problem)
         name = args.problem
     config = AbstractConfig(
@@ -351,9 +397,13 @@ def _print_text(
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from planner.runs import RunConfig, check_plan, preload_libraries, record_run, run
+    from planner.api import solve
+    from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore, default_db_path
 
+    # A bad scene or domain fails before anything is recorded.
+    loaded, _ = problem_for_scene(args.scene, seed=args.seed, domain=args.domain)
+    db = args.db or default_db_path()
     config = RunConfig(
         scene=args.scene,
         seed=args.seed,
@@ -363,15 +413,18 @@ def cmd_plan(args: argparse.Namespace) -> int:
         model=args.model,
         c_explore=args.c_explore,
         order=args.order,
+        domain=_domain_ref(loaded, args.domain),
+        priors_db=str(db) if args.model is None and loaded.spec.model is None else None,
     )
-    problem_for_scene(args.scene, seed=args.seed)  # a bad scene fails before anything is recorded
     preload_libraries(config)
     progress = _progress_line()
     if args.no_record:
-        result, loaded, problem = run(config, progress=progress)
-        valid, message, plan_data = check_plan(result, loaded, problem)
+        out = solve(config, progress=progress)
+        result = out.result
+        valid, message = out.check()
+        plan_data = out.plan_file()
     else:
-        store = RunStore(args.db or default_db_path())
+        store = RunStore(db)
         run_id = store.create_run(args.scene, args.seed, args.planner, asdict(config))
         recorded = record_run(config, store, run_id, progress=progress)
         store.close()
@@ -390,6 +443,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     summary = {
         "run_id": result.run_id,
         "scene": args.scene,
+        "domain": loaded.name,
         "seed": args.seed,
         "planner": args.planner,
         "status": result.status,
@@ -403,7 +457,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
         "reused": result.reused,
         "plan_file": str(args.out) if args.out and plan_data else None,
-        "db": None if args.no_record else str(args.db or default_db_path()),
+        "db": None if args.no_record else str(db),
     }
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -433,10 +487,12 @@ def cmd_collect(args: argparse.Namespace) -> int:
     from planner.experiment import Trial, run_trials, stderr_progress
     from planner.runs import RunConfig
 
-    problem_for_scene(args.scene)  # a bad scene fails before any trial starts
+    # A bad scene fails before any trial starts.
+    loaded, _ = problem_for_scene(args.scene, domain=args.domain)
+    domain = _domain_ref(loaded, args.domain)
     RunConfig(scene=args.scene, planner=args.planner, budget_s=args.budget, model=args.model)
     trials = [
-        Trial(args.scene, seed, args.planner, args.budget, args.model)
+        Trial(args.scene, seed, args.planner, args.budget, args.model, domain=domain)
         for seed in range(args.seed_start, args.seed_start + args.trials)
     ]
     results = run_trials(trials, args.db, workers=args.workers, progress=stderr_progress)
@@ -465,6 +521,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.resume is None:
         if not args.scene:
             raise ValueError("--scene is required (or --resume BENCH_ID)")
+        loaded, _ = problem_for_scene(args.scene, domain=args.domain)
         config = make_config(
             args.scene,
             args.planners.split(","),
@@ -473,6 +530,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
             budget_s=args.budget,
             model=args.model,
             order=args.order,
+            domain=_domain_ref(loaded, args.domain),
         )
     bench_id, results = run_bench(
         db,
@@ -524,46 +582,88 @@ def cmd_report(args: argparse.Namespace) -> int:
 def cmd_train(args: argparse.Namespace) -> int:
     from planner.learning.train import format_report, load_records, train
 
-    records = load_records(args.db)
+    loaded = load_domain(args.domain) if args.domain else None
+    records = load_records(args.db, domain=None if loaded is None else loaded.name)
     if not records:
-        raise ValueError(f"no stream queries in {', '.join(map(str, args.db))}")
-    model, report = train(records, seed=args.seed, epochs=args.epochs)
+        where = ", ".join(map(str, args.db))
+        if loaded is not None:
+            raise ValueError(f"no stream queries of domain {loaded.name!r} in {where}")
+        raise ValueError(f"no stream queries in {where}")
+    if loaded is None:
+        domains = records.domains()
+        if len(domains) != 1 or "?" in domains:
+            found = ", ".join(f"{d} ({n} runs)" for d, n in domains.items())
+            raise ValueError(
+                f"the stores hold runs of {found}: choose the domain with --domain"
+                + (" ('?': runs whose scene no longer loads)" if "?" in domains else "")
+            )
+        loaded = records.domains_found[next(iter(domains))]
+    model, report = train(records, domain=loaded, seed=args.seed, epochs=args.epochs)
     model.save(args.out)
     if args.json:
         print(json.dumps(report.to_dict(), indent=2))
     else:
+        print(f"domain {loaded.name}: {len(records)} queries")
         print(format_report(report))
         print(f"model written to {args.out}")
     return 0
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from planner.domains.kitchen.plan_io import read_plan
-    from planner.domains.kitchen.validate import validate_plan
+    from planner.plans import read_plan, validate
 
     plan = read_plan(args.plan)
-    _, problem = problem_for_scene(plan.scene, seed=plan.seed)
-    report = validate_plan(plan.actions, plan.values, problem)
+    domain = args.domain or plan.domain_path or plan.domain
+    loaded, problem = problem_for_scene(plan.scene, seed=plan.seed, domain=domain)
+    if loaded.name != plan.domain:
+        raise PlanFileError(
+            f"{args.plan}: the plan is for domain {plan.domain!r}, not {loaded.name!r}"
+        )
+    values = {**{o.name: o.name for o in problem.objects}, **problem.values}
+    values.update(plan.decoded_values(loaded))
+    runtime = loaded.runtime(problem, seed=plan.seed) if loaded.spec.bindings else None
+    report = validate(loaded, problem, plan.actions, values, streams=plan.streams, runtime=runtime)
     if report.ok:
-        print(f"{args.plan}: valid ({len(plan.actions)} actions, {report.execution_s:.2f} s)")
+        seconds = f", {report.execution_s:.2f} s" if report.execution_s is not None else ""
+        print(f"{args.plan}: {report.message} ({len(plan.actions)} actions{seconds})")
         return 0
-    print(f"{args.plan}: INVALID at {report.message}")
+    print(f"{args.plan}: INVALID: {report.message}")
     return 1
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from planner.domains.kitchen.render import render_scene
+    from planner.sim.render import render_scene
 
+    loaded, problem = problem_for_scene(args.scene, seed=args.seed, domain=args.domain)
+    if loaded.spec.view is None:
+        raise ValueError(
+            f"domain {loaded.name!r} has no scene description (DomainSpec.view): nothing to render"
+        )
     info = render_scene(
-        args.scene, seed=args.seed, out=args.out, width=args.width, height=args.height
+        loaded.spec.view.scene(problem), out=args.out, width=args.width, height=args.height
     )
     print(f"wrote {info.path}")
     return 0
 
 
-def cmd_scenes(_: argparse.Namespace) -> int:
-    for name in known_scenes():
-        print(name)
+def cmd_scenes(args: argparse.Namespace) -> int:
+    extra = [load_domain(d) for d in args.domain or ()]
+    refs = scene_refs(extra)
+    width = max((len(r.name) for r in refs), default=5)
+    for ref in refs:
+        try:
+            domain = scene_domain(ref).name
+        except (DomainLoadError, SceneError) as exc:
+            domain = f"? ({exc})"
+        print(f"{ref.name:<{width}}  {domain:<12}  {ref.path}")
+    return 0
+
+
+def cmd_domains(_: argparse.Namespace) -> int:
+    for info in domain_infos():
+        state = info.directory if info.error is None else f"NOT LOADED: {info.error}"
+        print(f"{info.name:<12}  {info.source}")
+        print(f"{'':<12}  {state}")
     return 0
 
 
@@ -583,6 +683,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         "max_queued": args.max_queued,
         "model_dir": args.models,
         "reports_dir": args.reports,
+        "extra_domains": args.domain,
     }
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
@@ -603,6 +704,7 @@ COMMANDS = {
     "validate": cmd_validate,
     "render": cmd_render,
     "scenes": cmd_scenes,
+    "domains": cmd_domains,
     "serve": cmd_serve,
 }
 

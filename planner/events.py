@@ -127,6 +127,8 @@ class NodeAdded(_EventBase):
     outputs: list[Any]  # JSON-encoded values the query bound, one per output name
     label: str  # short text for the dashboard
     output_names: list[str] = field(default_factory=list)  # the optimistic objects bound
+    # One line per output for people, from the domain's value types (empty: none given).
+    output_labels: list[str] = field(default_factory=list)
 
     def _validate(self) -> None:
         self._non_negative("node_id", "parent_id")
@@ -144,6 +146,8 @@ class NodeAdded(_EventBase):
             self._fail(
                 "outputs", f"{len(self.outputs)} values for {len(self.output_names)} output names"
             )
+        if self.output_labels and len(self.output_labels) != len(self.outputs):
+            self._fail("output_labels", f"{len(self.output_labels)} labels, {len(self.outputs)} values")
 
 
 @dataclass(frozen=True)
@@ -182,6 +186,8 @@ class StreamQueried(_EventBase):
     # Why a sampler that ran cleanly found nothing, when it said (the kitchen's: "base motion:
     # no path in 150 iterations", "no IK solution ..."); None for a success or an error.
     reason: str | None = None
+    # One line per input for people, from the domain's value types (empty: none given).
+    input_labels: list[str] = field(default_factory=list)
 
     def _validate(self) -> None:
         self._non_negative("node_id", "wall_s", "cpu_s", "execution_s")

@@ -34,6 +34,7 @@ class Trial:
     budget_s: float
     model: str | None = None  # model file, for learned planners (and --order model)
     order: str = "auto"  # stream order (RunConfig.order)
+    domain: str | None = None  # the domain's name or folder (RunConfig.domain)
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,9 @@ def run_trial(trial: Trial, db: str) -> TrialResult:
         budget_s=trial.budget_s,
         model=trial.model,
         order=trial.order,
+        domain=trial.domain,
+        # A learned trial with no model for its domain runs on the priors of this store.
+        priors_db=db if trial.model is None and trial.planner == "learned" else None,
     )
     preload_libraries(config)
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config))

@@ -670,10 +670,10 @@ function renderInspector() {
   row("Outcome", `<span class="outcome ${outcome.replace(" ", "-")}">${outcome}</span>`, "inspector-outcome");
   if (node.label && !isRoot) row("Label", `<code>${escapeHtml(node.label)}</code>`);
   if (query) {
-    row("Inputs", kvList(query.input_names, query.inputs), "inspector-inputs");
+    row("Inputs", kvList(query.input_names, query.inputs, query.input_labels), "inspector-inputs");
   }
   if (!isRoot && !isPlan) {
-    row("Outputs", kvList(node.outputNames, node.outputs), "inspector-outputs");
+    row("Outputs", kvList(node.outputNames, node.outputs, node.outputLabels), "inspector-outputs");
   }
   if (query) {
     row("Wall / CPU", `${seconds(query.wall_s)} / ${seconds(query.cpu_s)}`, "inspector-seconds");
@@ -726,10 +726,12 @@ function renderInspector() {
   el.inspectorBody.innerHTML = html;
 }
 
-function kvList(names, values) {
+/** Names = values; a value as the domain labels it (its value type's label), else as JSON. */
+function kvList(names, values, labels) {
   const items = values.map((v, i) => {
     const name = names?.[i] ?? `#${i}`;
-    return `<li><code>${escapeHtml(name)}</code> = ${escapeHtml(value(v))}</li>`;
+    const text = labels?.[i] || value(v);
+    return `<li><code>${escapeHtml(name)}</code> = ${escapeHtml(text)}</li>`;
   });
   return items.length ? `<ul class="values">${items.join("")}</ul>` : `<span class="muted">none</span>`;
 }

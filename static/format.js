@@ -20,7 +20,8 @@ export function num(x, digits = 3) {
 
 /**
  * A planner value (JSON from the domain's codec) as compact text: numbers rounded, long lists
- * cut, kitchen values by their kind ("pose x=1.2 y=0.3 …", "trajectory, 3 segments").
+ * cut, typed values by their type and first fields ("pose x=1.2 y=0.3 …"). The inspector shows
+ * the domain's own label instead when the events carry one.
  */
 export function value(v, depth = 0) {
   if (v === null || v === undefined) return "null";
@@ -33,10 +34,6 @@ export function value(v, depth = 0) {
     return `[${head.join(", ")}${v.length > 7 ? `, … ${v.length} items` : ""}]`;
   }
   if (typeof v === "object") {
-    if (v.type === "trajectory" && Array.isArray(v.segments)) {
-      const kinds = v.segments.map((s) => s.kind).join(", ");
-      return `trajectory, ${v.segments.length} segment${v.segments.length === 1 ? "" : "s"} (${kinds})`;
-    }
     if (depth > 2) return "{…}";
     const keys = Object.keys(v).filter((k) => k !== "type");
     const parts = keys.slice(0, 8).map((k) => `${k}=${value(v[k], depth + 1)}`);

@@ -143,6 +143,7 @@ export class SearchTree {
       ev.outputs,
       ev.output_names,
       ev.label,
+      ev.output_labels,
     );
     const replaced = this.byId.get(ev.node_id);
     this.byId.set(node.id, node);
@@ -219,7 +220,9 @@ export class SearchTree {
   }
 }
 
-function makeNode(id, parent, planIndex, depth, level, stream, success, outputs, names, label) {
+function makeNode(
+  id, parent, planIndex, depth, level, stream, success, outputs, names, label, valueLabels,
+) {
   return {
     id,
     parent,
@@ -231,6 +234,7 @@ function makeNode(id, parent, planIndex, depth, level, stream, success, outputs,
     success,
     outputs: outputs ?? [],
     outputNames: names ?? [],
+    outputLabels: valueLabels ?? [], // the domain's one-line labels of the outputs, if any
     label: label ?? "",
     pred: null, // the latest model_prediction event
     visit: null, // the latest node_visited event

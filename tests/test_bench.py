@@ -20,9 +20,10 @@ from planner.bench import (
     trial_order,
 )
 from planner.cli import main
+from planner.domains import load_domain
+from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
 from planner.report import failure_kind, query_summary, render_html, summarize
-from planner.runs import DEFAULT_MODEL
 from planner.store import QueryOutcome, RunStore
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
@@ -54,7 +55,7 @@ def test_bad_settings_fail_before_any_trial(kwargs: dict[str, object], says: str
 
 
 def test_the_model_must_fit_the_scene_and_not_have_seen_its_seeds(tmp_path: Path) -> None:
-    model = CostModel.load(DEFAULT_MODEL)
+    model = CostModel.load(DEFAULT_MODEL, domain=load_domain("kitchen"))
     model.metadata["training_seeds"] = {"kitchen-4": list(range(20))}
     path = tmp_path / "m.pt"
     model.save(path)
@@ -77,7 +78,7 @@ def test_the_model_must_fit_the_scene_and_not_have_seen_its_seeds(tmp_path: Path
 def test_a_resumed_benchmark_finds_its_model_by_content(tmp_path: Path) -> None:
     """Resuming from another checkout: the recorded model path is gone, but the shipped model is
     the same file; a model whose content changed is refused (one benchmark, one model)."""
-    elsewhere = tmp_path / "old-checkout" / "kitchen.pt"
+    elsewhere = tmp_path / "old-checkout" / "model.pt"
     elsewhere.parent.mkdir()
     elsewhere.write_bytes(DEFAULT_MODEL.read_bytes())
     config = make_config(
@@ -88,7 +89,7 @@ def test_a_resumed_benchmark_finds_its_model_by_content(tmp_path: Path) -> None:
     elsewhere.unlink()
     assert locate_model(config, sha).model == str(DEFAULT_MODEL)
     elsewhere.write_bytes(b"retrained")
-    with pytest.raises(BenchError, match=r"kitchen.pt has changed .* start a new benchmark"):
+    with pytest.raises(BenchError, match=r"model.pt has changed .* start a new benchmark"):
         locate_model(config, "0" * 64)
     assert locate_model(config, None) == config  # recorded before models were hashed
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from planner.domains.kitchen.features import room_left
 from planner.events import NodeAdded, RunFinished, RunStarted, SolutionFound, StreamQueried
-from planner.learning.features import room_left
 from planner.runs import RunConfig, run
 from planner.store import RunStore, StoreSink
 

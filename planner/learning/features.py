@@ -1,69 +1,59 @@
-"""Feature vectors of stream queries: local features of the inputs, global features of the scene.
+"""Feature rows of stream queries: the stream's inputs (local) and the state it is queried in
+(global), for any domain.
 
-A row is ``[slot 0 | slot 1 | ... | scene]``. Each input slot is a mask bit followed by the slot's
-features: a name is one-hot over the slot's vocabulary plus an "unknown" bucket; a pose is
-``[x, y, z, cos yaw, sin yaw]``; a grasp ``[is_top, position(3), quat_xyzw(4)]``; a conf
-``[x, y, cos yaw, sin yaw, torso, arm(7)]``. An input that is not bound yet (``None``: the planner
-scores a stream before the streams feeding it have been queried) is a zero vector with its mask
-bit set to 1, as in the paper. The scene part has, for each block ``b1..b<max_blocks>``,
-``[present, on table, on sink, on stove, held, x, y, cos yaw, sin yaw]`` (zeros when the block
-is absent or its pose is not known) and then the number of blocks on the stove and on the sink.
+A row is ``[slot 0 | slot 1 | ... | stream part | state part]``:
 
-A placement also gets the room left on its platform, after its input slots:
-``[unknown, room, blocks on it]``. ``room`` is how far the block's centre can stay from every
-block already there: the largest distance to the nearest of their centres over a grid of the
-centres where the block fits on the platform, in centimetres (the training noise, 0.3 on every
-feature, would drown a difference of a few centimetres in metres), capped at
-:data:`ROOM_CAP`. It reads the platform's footprint and the block's size from the context's
-``geometry`` (see :func:`planner.domains.kitchen.static_context`); without them ``unknown`` is
-1. Where the last block goes onto a crowded stove, this one number tells success from failure
-(on the validation trials of the shipped model, the fourth block onto the stove: AUC 0.98 for
-the room alone, 0.96 for the model, 0.37 for the model before it; benchmarks/stove_room.py).
+- each **input slot** is a mask bit then the value's features: a ``name`` is one-hot over the
+  names seen in training plus an "unknown" bucket; a ``number`` is itself; a ``vector`` its
+  numbers; a domain's value type gives its own ``width`` numbers
+  (:class:`planner.values.ValueType`). An input that is not bound yet (``None``: the planner
+  scores a stream before the streams feeding it have been queried) is a zero vector with its
+  mask bit set to 1, as in the paper.
+- the **stream** and **state** parts come from the domain's :class:`StateFeatures` hook
+  (``DomainSpec.features``). The default, :class:`FactFeatures`, is the paper's "global
+  information" for any domain: the fluent facts that hold where the stream's output is needed and
+  the values they hold (see its docstring). A domain may replace it with features of its own
+  (the kitchen's room left on a platform).
 
-The layout of every stream (slot kinds, name vocabularies) is a :class:`FeatureSpec`, learned
-from recorded queries by :meth:`Featurizer.fit` and saved inside the model file as a plain dict.
-This module needs no torch.
+The layout of every stream (slot kinds, name vocabularies) and the state encoder's parameters
+are a :class:`FeatureSpec`, fit on recorded queries by :meth:`Featurizer.fit` and saved inside
+the model file as a plain dict. This module needs no torch.
 """
 
 from __future__ import annotations
 
-import math
+from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, Literal, Protocol, get_args
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
-FEATURE_VERSION = 2  # bump whenever a row's layout or meaning changes: old models must not load
+from planner.abstract.instantiate import OPTIMISTIC_PREFIX
+from planner.values import JSON, OPAQUE, FeatureError, ValueCodec
 
-SlotKind = Literal["name", "pose", "grasp", "conf"]
-SLOT_KINDS: tuple[SlotKind, ...] = get_args(SlotKind)
-VALUE_WIDTHS: Mapping[str, int] = {"pose": 5, "grasp": 8, "conf": 11}
+if TYPE_CHECKING:
+    from planner.domains.spec import LoadedDomain
 
-KNOWN_DOMAINS = ("kitchen",)
-KITCHEN_PLATFORMS = ("table", "sink", "stove")  # one "on <platform>" feature each, in this order
-KITCHEN_COUNTED = ("stove", "sink")  # "how many blocks are on it" features, in this order
-KITCHEN_MAX_BLOCKS = 8  # b1..b8: the largest kitchen scene
-# The kitchen's streams (domains/kitchen/stream.pddl): what each input slot holds.
-KITCHEN_SLOTS: Mapping[str, tuple[SlotKind, ...]] = {
-    "sample-grasp": ("name",),
-    "sample-placement": ("name", "name"),
-    "inverse-kinematics": ("name", "pose", "grasp"),
-    "plan-motion": ("conf", "conf"),
-}
+__all__ = [
+    "FEATURE_VERSION",
+    "FactFeatures",
+    "FeatureError",
+    "FeatureSpec",
+    "Featurizer",
+    "SlotSpec",
+    "StateEncoder",
+    "StateFeatures",
+    "StreamLayout",
+]
 
-# Streams that get the room-left features, and which of their inputs is the platform.
-KITCHEN_ROOM: Mapping[str, int] = {"sample-placement": 1}
-ROOM_WIDTH = 3  # unknown, room (cm), blocks on the platform
-ROOM_CAP = 30.0  # centimetres: more room than this is plenty
-ROOM_GRID = 9  # candidate centres per side of the platform
+FEATURE_VERSION = 3  # bump whenever a row's layout or meaning changes: old models must not load
+MAX_FACT_KEYS = 128  # FactFeatures: the most frequent fact patterns kept (the rest only counted)
+MAX_SEEN_FACTS = 100_000  # facts whose encoding a FactEncoder remembers (cleared beyond)
 
 FloatArray = npt.NDArray[np.float32]
-
-
-class FeatureError(ValueError):
-    """A feature spec or a value does not fit; the message names the stream, slot or field."""
+Context = Mapping[str, Any]  # {"facts": [[pred, *args], ...], "values": {name: JSON}, ...}
 
 
 class QueryLike(Protocol):
@@ -75,47 +65,321 @@ class QueryLike(Protocol):
     @property
     def inputs(self) -> list[Any]: ...
 
+    @property
+    def context(self) -> dict[str, Any]: ...
 
-# --- the spec --------------------------------------------------------------------------------
+
+# --- the state hook ----------------------------------------------------------------------------
+
+
+class StateEncoder(Protocol):
+    """A fitted encoding of the state (and of anything else per stream): saved in the model."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON data, with ``"kind"`` (the :class:`StateFeatures` that reloads it)."""
+        ...
+
+    @property
+    def scene_width(self) -> int:
+        """Numbers of the state part (the same for every stream)."""
+        ...
+
+    def stream_width(self, stream: str) -> int:
+        """Numbers of the stream part after the input slots (0 for most streams)."""
+        ...
+
+    def stream_features(
+        self, stream: str, inputs: Sequence[JSON | None], context: Context
+    ) -> Sequence[float]:
+        """The stream part of a row (``stream_width`` numbers)."""
+        ...
+
+    def scene_features(self, context: Context, out: FloatArray, offset: int) -> None:
+        """Write the state part into ``out[offset : offset + scene_width]`` (zeroed before)."""
+        ...
+
+    def feature_names(self, stream: str) -> tuple[list[str], list[str]]:
+        """Column names of the stream part and of the state part."""
+        ...
+
+    def finish_row(
+        self,
+        stream: str,
+        inputs: Sequence[JSON | None],
+        row: FloatArray,
+        slots: Sequence[tuple[str, int, int]],
+    ) -> None:
+        """Adjust a finished row in place (``slots``: kind, offset and width of each input
+        slot); most encoders do nothing here."""
+        ...
+
+
+class StateFeatures(Protocol):
+    """A domain's feature hook: fits a :class:`StateEncoder` on recorded queries and reloads one
+    from a model file."""
+
+    @property
+    def kind(self) -> str:
+        """The name saved in model files (``"facts"``, ``"kitchen"``)."""
+        ...
+
+    def fit(self, records: Sequence[QueryLike], codec: ValueCodec) -> StateEncoder: ...
+
+    def load(self, data: Mapping[str, Any], codec: ValueCodec) -> StateEncoder: ...
+
+
+# --- the generic state encoding -----------------------------------------------------------------
+
+
+def _is_optimistic(name: str) -> bool:
+    return name.startswith(OPTIMISTIC_PREFIX)
+
+
+def _fact_key(fact: Sequence[str]) -> str:
+    """A fact's pattern: optimistic objects (sampled values) become ``*``; problem objects keep
+    their names. ``["at-pose", "b1", "opt-p3"]`` -> ``"at-pose b1 *"``."""
+    return " ".join(["*" if _is_optimistic(a) else a for a in fact])
+
+
+def _facts(context: Context) -> list[list[str]]:
+    facts = context.get("facts", [])
+    if not isinstance(facts, list):
+        raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
+    for fact in facts:
+        if not isinstance(fact, list) or not fact or not all(isinstance(a, str) for a in fact):
+            raise FeatureError(f"context: malformed fact {fact!r}")
+    return facts
+
+
+def _values(context: Context) -> Mapping[str, Any]:
+    values = context.get("values", {})
+    if not isinstance(values, Mapping):
+        raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
+    return values
+
+
+@dataclass(frozen=True)
+class _KeySlot:
+    """One argument of a fact pattern that holds a value: its position and kind."""
+
+    position: int  # 1-based: position 0 is the predicate
+    kind: str | None  # None: never bound in the training queries (only its mask bit)
+    size: int = 0  # a vector's length
+
+
+@dataclass(frozen=True)
+class FactEncoder:
+    """The fluent facts of a query's state and the values they hold (:class:`FactFeatures`).
+
+    The state part is: per fluent predicate seen in training, how many facts of it hold; then per
+    fact pattern (``"on b1 stove"``, ``"at-pose b1 *"``: optimistic objects as ``*``; the
+    :data:`MAX_FACT_KEYS` most frequent in training), how many facts of that pattern hold, and for
+    each argument that holds a value, a mask bit (1: not bound yet) and the value's features.
+    """
+
+    predicates: tuple[str, ...]
+    keys: tuple[tuple[str, tuple[_KeySlot, ...]], ...]
+    codec: ValueCodec = field(repr=False, compare=False)
+    _key_index: dict[str, int] = field(init=False, repr=False, compare=False)
+    _key_offset: tuple[int, ...] = field(init=False, repr=False, compare=False)
+    _pred_index: dict[str, int] = field(init=False, repr=False, compare=False)
+    _width: int = field(init=False, repr=False, compare=False)
+    _slots: tuple[tuple[tuple[_KeySlot, int], ...], ...] = field(
+        init=False, repr=False, compare=False
+    )
+    _seen: dict[tuple[str, ...], tuple[int | None, int | None]] = field(
+        init=False, repr=False, compare=False
+    )
+
+    def __post_init__(self) -> None:
+        offsets = []
+        at = len(self.predicates)
+        for _, slots in self.keys:
+            offsets.append(at)
+            at += 1 + sum(1 + self._slot_width(s) for s in slots)
+        object.__setattr__(self, "_key_index", {k: i for i, (k, _) in enumerate(self.keys)})
+        object.__setattr__(self, "_key_offset", tuple(offsets))
+        object.__setattr__(self, "_pred_index", {p: i for i, p in enumerate(self.predicates)})
+        object.__setattr__(self, "_width", at)
+        per_key = tuple(tuple((s, self._slot_width(s)) for s in ss) for _, ss in self.keys)
+        object.__setattr__(self, "_slots", per_key)
+        object.__setattr__(self, "_seen", {})
+
+    def _slot_width(self, slot: _KeySlot) -> int:
+        return 0 if slot.kind is None else self.codec.width(slot.kind, slot.size)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": FactFeatures.kind,
+            "predicates": list(self.predicates),
+            "keys": [
+                [key, [[s.position, s.kind, s.size] for s in slots]] for key, slots in self.keys
+            ],
+        }
+
+    @property
+    def scene_width(self) -> int:
+        return self._width
+
+    def stream_width(self, stream: str) -> int:
+        return 0
+
+    def stream_features(
+        self, stream: str, inputs: Sequence[JSON | None], context: Context
+    ) -> Sequence[float]:
+        return ()
+
+    def _entry(self, fact: Any) -> tuple[int | None, int | None]:
+        """A fact's predicate and pattern indices (None: not in the encoding); checked here, on
+        the first sight of each fact, and remembered."""
+        if not isinstance(fact, list) or not fact or not all(isinstance(a, str) for a in fact):
+            raise FeatureError(f"context: malformed fact {fact!r}")
+        entry = (self._pred_index.get(fact[0]), self._key_index.get(_fact_key(fact)))
+        if len(self._seen) > MAX_SEEN_FACTS:
+            self._seen.clear()
+        self._seen[tuple(fact)] = entry
+        return entry
+
+    def scene_features(self, context: Context, out: FloatArray, offset: int) -> None:
+        values = _values(context)
+        facts = context.get("facts", [])
+        if not isinstance(facts, list):
+            raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
+        seen = self._seen
+        for fact in facts:
+            try:
+                p, k = seen[tuple(fact)]
+            except (KeyError, TypeError):
+                p, k = self._entry(fact)
+            if p is not None:
+                out[offset + p] += 1.0
+            if k is None:
+                continue
+            at = offset + self._key_offset[k]
+            out[at] += 1.0
+            at += 1
+            for slot, width in self._slots[k]:
+                name = fact[slot.position] if slot.position < len(fact) else None
+                value = values.get(name) if name is not None else None
+                if value is None or slot.kind is None or self.codec.kind_of(value) != slot.kind:
+                    out[at] = 1.0  # not bound (or not of the kind seen in training)
+                else:
+                    out[at + 1 : at + 1 + width] = self.codec.features(
+                        slot.kind, value, slot.size, "context value"
+                    )
+                at += 1 + width
+
+    def finish_row(
+        self,
+        stream: str,
+        inputs: Sequence[JSON | None],
+        row: FloatArray,
+        slots: Sequence[tuple[str, int, int]],
+    ) -> None:
+        return None
+
+    def feature_names(self, stream: str) -> tuple[list[str], list[str]]:
+        names = [f"n[{p}]" for p in self.predicates]
+        for key, slots in self.keys:
+            names.append(f"({key})")
+            for s in slots:
+                names.append(f"({key}).arg{s.position}.unbound")
+                names += [
+                    f"({key}).arg{s.position}.{s.kind}[{j}]" for j in range(self._slot_width(s))
+                ]
+        return [], names
+
+
+class FactFeatures:
+    """The default :class:`StateFeatures`: :class:`FactEncoder`, fit on the training queries'
+    contexts (which patterns occur, what kind of value each argument holds)."""
+
+    kind = "facts"
+
+    def __init__(self, max_keys: int = MAX_FACT_KEYS) -> None:
+        self.max_keys = max_keys
+
+    def fit(self, records: Sequence[QueryLike], codec: ValueCodec) -> FactEncoder:
+        predicates: set[str] = set()
+        counts: Counter[str] = Counter()
+        kinds: dict[str, dict[int, tuple[str | None, int]]] = {}
+        for record in records:
+            context = record.context
+            values = _values(context)
+            for fact in _facts(context):
+                predicates.add(fact[0])
+                key = _fact_key(fact)
+                counts[key] += 1
+                slots = kinds.setdefault(key, {})
+                for i, arg in enumerate(fact[1:], start=1):
+                    value = values.get(arg)
+                    if value is None and not _is_optimistic(arg):
+                        continue  # a problem object with no value: part of the pattern
+                    kind = codec.kind_of(value) if value is not None else None
+                    if kind == OPAQUE:
+                        kind = None
+                    size = len(value) if kind == "vector" and isinstance(value, list) else 0
+                    known = slots.get(i)
+                    if known is None or known[0] is None:
+                        slots[i] = (kind, size)
+        chosen = sorted(counts, key=lambda k: (-counts[k], k))[: self.max_keys]
+        keys = tuple(
+            (key, tuple(_KeySlot(i, kind, size) for i, (kind, size) in sorted(kinds[key].items())))
+            for key in sorted(chosen)
+        )
+        return FactEncoder(tuple(sorted(predicates)), keys, codec)
+
+    def load(self, data: Mapping[str, Any], codec: ValueCodec) -> FactEncoder:
+        try:
+            keys = tuple(
+                (
+                    str(key),
+                    tuple(
+                        _KeySlot(int(pos), None if kind is None else str(kind), int(size))
+                        for pos, kind, size in slots
+                    ),
+                )
+                for key, slots in data["keys"]
+            )
+            encoder = FactEncoder(tuple(str(p) for p in data["predicates"]), keys, codec)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise FeatureError(f"malformed fact features: missing or bad field {exc}") from exc
+        for _, slots in keys:
+            for s in slots:
+                builtin = s.kind is None or s.kind in ("number", "vector", "name")
+                if not builtin and codec.value_type(str(s.kind)) is None:
+                    raise FeatureError(
+                        f"the model reads values of type {s.kind!r}, which this domain does "
+                        f"not declare (its value types: {', '.join(codec.names) or 'none'})"
+                    )
+        return encoder
+
+
+# --- the spec ------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class SlotSpec:
-    """One input slot of a stream: its kind and, for names, the vocabulary seen in training."""
+    """One input slot of a stream: its kind, the names seen in training (names) or the length
+    (vectors)."""
 
-    kind: SlotKind
+    kind: str
     vocabulary: tuple[str, ...] = ()
+    size: int = 0
 
     def __post_init__(self) -> None:
-        if self.kind not in SLOT_KINDS:
-            raise FeatureError(f"unknown slot kind {self.kind!r} (known: {', '.join(SLOT_KINDS)})")
         if self.vocabulary and self.kind != "name":
             raise FeatureError(f"a {self.kind} slot has no vocabulary")
         if len(set(self.vocabulary)) != len(self.vocabulary):
             raise FeatureError(f"repeated names in vocabulary {list(self.vocabulary)}")
-
-    @property
-    def width(self) -> int:
-        """Mask bit plus features (a name: one-hot with an unknown bucket)."""
-        body = len(self.vocabulary) + 1 if self.kind == "name" else VALUE_WIDTHS[self.kind]
-        return 1 + body
+        if (self.kind == "vector") != (self.size > 0):
+            raise FeatureError(f"a {self.kind} slot of size {self.size}: only vectors have one")
 
 
 @dataclass(frozen=True)
 class StreamLayout:
     stream: str
     slots: tuple[SlotSpec, ...]
-    room: int | None = None  # the input naming the platform, for the room-left features
-
-    def __post_init__(self) -> None:
-        if self.room is not None and not (
-            0 <= self.room < len(self.slots) and self.slots[self.room].kind == "name"
-        ):
-            raise FeatureError(f"stream {self.stream!r}: room input {self.room} is not a name")
-
-    @property
-    def width(self) -> int:
-        return sum(s.width for s in self.slots) + (ROOM_WIDTH if self.room is not None else 0)
 
 
 @dataclass(frozen=True)
@@ -123,32 +387,16 @@ class FeatureSpec:
     """Everything needed to rebuild a featurizer: saved in the model file as :meth:`to_dict`."""
 
     streams: tuple[StreamLayout, ...]
+    domain: str
+    state: Mapping[str, Any]  # the state encoder's to_dict(), with its "kind"
     version: int = FEATURE_VERSION
-    domain: str = "kitchen"
-    max_blocks: int = KITCHEN_MAX_BLOCKS  # scene features are padded to this many blocks
-    platforms: tuple[str, ...] = KITCHEN_PLATFORMS
-    counted: tuple[str, ...] = KITCHEN_COUNTED
 
     def __post_init__(self) -> None:
-        if self.domain not in KNOWN_DOMAINS:
-            raise FeatureError(
-                f"no scene features for domain {self.domain!r} (known: {', '.join(KNOWN_DOMAINS)})"
-            )
-        if self.max_blocks < 1:
-            raise FeatureError(f"max_blocks must be >= 1, got {self.max_blocks}")
         names = [s.stream for s in self.streams]
         if len(set(names)) != len(names):
             raise FeatureError(f"a stream has two layouts: {names}")
-        if not set(self.counted) <= set(self.platforms):
-            raise FeatureError(f"counted platforms {self.counted} are not all in {self.platforms}")
-
-    @property
-    def blocks(self) -> tuple[str, ...]:
-        return tuple(f"b{i}" for i in range(1, self.max_blocks + 1))
-
-    @property
-    def scene_width(self) -> int:
-        return self.max_blocks * (len(self.platforms) + 6) + len(self.counted)
+        if not isinstance(self.state.get("kind"), str):
+            raise FeatureError("the feature spec's state part names no kind")
 
     def layout(self, stream: str) -> StreamLayout | None:
         for layout in self.streams:
@@ -160,139 +408,126 @@ class FeatureSpec:
         return {
             "version": self.version,
             "domain": self.domain,
-            "max_blocks": self.max_blocks,
-            "platforms": list(self.platforms),
-            "counted": list(self.counted),
             "streams": {
                 layout.stream: [
-                    {"kind": s.kind, "vocabulary": list(s.vocabulary)} for s in layout.slots
+                    {"kind": s.kind, "vocabulary": list(s.vocabulary), "size": s.size}
+                    for s in layout.slots
                 ]
                 for layout in self.streams
             },
-            "room": {
-                layout.stream: layout.room for layout in self.streams if layout.room is not None
-            },
+            "state": dict(self.state),
         }
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> FeatureSpec:
         """The inverse of :meth:`to_dict`; a malformed dict raises :class:`FeatureError`."""
         try:
-            room = {str(k): int(v) for k, v in data.get("room", {}).items()}
             streams = tuple(
                 StreamLayout(
                     str(name),
                     tuple(
-                        SlotSpec(s["kind"], tuple(str(v) for v in s["vocabulary"])) for s in slots
+                        SlotSpec(
+                            str(s["kind"]),
+                            tuple(str(v) for v in s["vocabulary"]),
+                            int(s.get("size", 0)),
+                        )
+                        for s in slots
                     ),
-                    room.get(str(name)),
                 )
                 for name, slots in data["streams"].items()
             )
             return cls(
                 streams=streams,
-                version=int(data["version"]),
                 domain=str(data["domain"]),
-                max_blocks=int(data["max_blocks"]),
-                platforms=tuple(str(p) for p in data["platforms"]),
-                counted=tuple(str(p) for p in data["counted"]),
+                state=dict(data["state"]),
+                version=int(data["version"]),
             )
         except (KeyError, TypeError, AttributeError) as exc:
             raise FeatureError(f"malformed feature spec: missing or bad field {exc}") from exc
 
 
-# --- the featurizer --------------------------------------------------------------------------
+# --- the featurizer ------------------------------------------------------------------------------
 
 
-def _kind_of(value: Any) -> SlotKind | None:
-    if isinstance(value, str):
-        return "name"
-    if isinstance(value, Mapping) and value.get("type") in VALUE_WIDTHS:
-        kind: SlotKind = value["type"]
-        return kind
-    return None
-
-
-def _numbers(value: Any, n: int, where: str) -> list[float]:
-    if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != n:
-        raise FeatureError(f"{where}: expected {n} numbers, got {value!r}")
-    try:
-        return [float(v) for v in value]
-    except (TypeError, ValueError) as exc:
-        raise FeatureError(f"{where}: expected {n} numbers, got {value!r}") from exc
-
-
-def _pose_features(value: Mapping[str, Any], where: str) -> list[float]:
-    try:
-        x, y, z, yaw = (float(value[k]) for k in ("x", "y", "z", "yaw"))
-    except (KeyError, TypeError, ValueError) as exc:
-        raise FeatureError(f"{where}: malformed pose {value!r}") from exc
-    return [x, y, z, math.cos(yaw), math.sin(yaw)]
-
-
-def _grasp_features(value: Mapping[str, Any], where: str) -> list[float]:
-    position = _numbers(value.get("position"), 3, f"{where}.position")
-    quat = _numbers(value.get("quat_xyzw"), 4, f"{where}.quat_xyzw")
-    return [1.0 if value.get("kind") == "top" else 0.0, *position, *quat]
-
-
-def _conf_features(value: Mapping[str, Any], where: str) -> list[float]:
-    x, y, yaw = _numbers(value.get("base"), 3, f"{where}.base")
-    try:
-        torso = float(value.get("torso", 0.0))
-    except (TypeError, ValueError) as exc:
-        raise FeatureError(f"{where}.torso: expected a number") from exc
-    arm = _numbers(value.get("arm"), 7, f"{where}.arm")
-    return [x, y, math.cos(yaw), math.sin(yaw), torso, *arm]
-
-
-_VALUE_FEATURES = {"pose": _pose_features, "grasp": _grasp_features, "conf": _conf_features}
+def _state_features(domain: LoadedDomain) -> StateFeatures:
+    hook = domain.spec.features
+    return hook if hook is not None else FactFeatures()
 
 
 class Featurizer:
     """Fixed-length float32 rows for stream queries, per stream, following a :class:`FeatureSpec`.
 
-    A stream the spec has no layout for (never seen in training) gets the scene features only.
+    A stream the spec has no layout for (never seen in training) gets the state part only.
     """
 
-    def __init__(self, spec: FeatureSpec) -> None:
+    def __init__(self, spec: FeatureSpec, codec: ValueCodec, state: StateEncoder) -> None:
         if spec.version != FEATURE_VERSION:
             raise FeatureError(
                 f"feature spec version {spec.version}, this code computes version "
                 f"{FEATURE_VERSION}: retrain the model"
             )
         self._spec = spec
-        self._block_index = {b: i for i, b in enumerate(spec.blocks)}
-        self._platform_index = {p: i for i, p in enumerate(spec.platforms)}
+        self._codec = codec
+        self._state = state
+        self._layouts = {layout.stream: layout for layout in spec.streams}
         self._name_index = {
             layout.stream: [{v: i for i, v in enumerate(s.vocabulary)} for s in layout.slots]
             for layout in spec.streams
         }
+        self._slot_widths = {
+            layout.stream: [self._slot_width(s) for s in layout.slots] for layout in spec.streams
+        }
+        self._slot_places: dict[str, list[tuple[str, int, int]]] = {}
+        for layout in spec.streams:
+            at, places = 0, []
+            for slot, width in zip(layout.slots, self._slot_widths[layout.stream], strict=True):
+                places.append((slot.kind, at, width))
+                at += width
+            self._slot_places[layout.stream] = places
+        self._where = {
+            layout.stream: [f"stream {layout.stream!r} input {i}" for i in range(len(layout.slots))]
+            for layout in spec.streams
+        }
+        for layout in spec.streams:  # every kind must be one this domain has
+            for i, s in enumerate(layout.slots):
+                if s.kind not in ("name", "number", "vector") and codec.value_type(s.kind) is None:
+                    raise FeatureError(
+                        f"stream {layout.stream!r} input {i}: the model reads values of type "
+                        f"{s.kind!r}, which this domain does not declare (its value types: "
+                        f"{', '.join(codec.names) or 'none'})"
+                    )
+
+    def _slot_width(self, slot: SlotSpec) -> int:
+        """Mask bit plus features (a name: one-hot with an unknown bucket)."""
+        if slot.kind == "name":
+            return 2 + len(slot.vocabulary)
+        return 1 + self._codec.width(slot.kind, slot.size)
 
     def __repr__(self) -> str:
         return f"Featurizer(domain={self._spec.domain!r}, streams={list(self.streams)})"
 
     @classmethod
-    def fit(
-        cls,
-        records: Iterable[QueryLike],
-        *,
-        domain: str = "kitchen",
-        max_blocks: int = KITCHEN_MAX_BLOCKS,
-    ) -> Featurizer:
-        """Learn each stream's slot kinds and name vocabularies from recorded queries.
+    def fit(cls, records: Iterable[QueryLike], *, domain: LoadedDomain) -> Featurizer:
+        """Learn each stream's slot kinds, name vocabularies and vector lengths, and fit the
+        domain's state encoder, from recorded queries.
 
-        The kitchen's four streams always get a layout (kinds fixed by the domain), even with no
-        records; another stream takes its slot kinds from the first record that binds them.
+        The streams of ``DomainSpec.input_kinds`` always get a layout (kinds given by the
+        domain), even with no records; another stream takes its slot kinds from the records
+        that bind them.
         """
-        kinds: dict[str, list[SlotKind | None]] = {
-            s: list(k) for s, k in (KITCHEN_SLOTS.items() if domain == "kitchen" else ())
+        records = list(records)
+        codec = domain.codec
+        kinds: dict[str, list[str | None]] = {
+            s: list(k) for s, k in domain.spec.input_kinds.items()
         }
+        sizes: dict[str, list[int]] = {s: [0] * len(k) for s, k in kinds.items()}
         names: dict[str, list[set[str]]] = {s: [set() for _ in k] for s, k in kinds.items()}
+        known = ", ".join(("name", "number", "vector", *codec.names))
         for record in records:
             stream = record.stream
             if stream not in kinds:
                 kinds[stream] = [None] * len(record.inputs)
+                sizes[stream] = [0] * len(record.inputs)
                 names[stream] = [set() for _ in record.inputs]
             slots = kinds[stream]
             if len(record.inputs) != len(slots):
@@ -303,11 +538,17 @@ class Featurizer:
             for i, value in enumerate(record.inputs):
                 if value is None:
                     continue
-                kind = _kind_of(value)
+                kind = codec.kind_of(value)
+                if kind == OPAQUE:
+                    raise FeatureError(
+                        f"stream {stream!r} input {i}: values of Python type "
+                        f"{value.get('python_type')} have no value type in domain "
+                        f"{domain.name!r}: declare a ValueType for them (docs/domains.md)"
+                    )
                 if kind is None:
                     raise FeatureError(
                         f"stream {stream!r} input {i}: no features for value {value!r} "
-                        f"(known kinds: {', '.join(SLOT_KINDS)})"
+                        f"(known kinds: {known})"
                     )
                 if slots[i] is None:
                     slots[i] = kind
@@ -317,6 +558,13 @@ class Featurizer:
                     )
                 if kind == "name":
                     names[stream][i].add(value)
+                elif kind == "vector":
+                    if sizes[stream][i] and sizes[stream][i] != len(value):
+                        raise FeatureError(
+                            f"stream {stream!r} input {i}: vectors of {sizes[stream][i]} and "
+                            f"{len(value)} numbers"
+                        )
+                    sizes[stream][i] = len(value)
         layouts = []
         for stream in sorted(kinds):
             slots_spec = []
@@ -324,167 +572,110 @@ class Featurizer:
                 if kind is None:
                     raise FeatureError(f"stream {stream!r} input {i}: never bound in the records")
                 vocab = tuple(sorted(names[stream][i])) if kind == "name" else ()
-                slots_spec.append(SlotSpec(kind, vocab))
-            room = KITCHEN_ROOM.get(stream) if domain == "kitchen" else None
-            layouts.append(StreamLayout(stream, tuple(slots_spec), room))
-        return cls(FeatureSpec(streams=tuple(layouts), domain=domain, max_blocks=max_blocks))
+                slots_spec.append(SlotSpec(kind, vocab, sizes[stream][i]))
+            layouts.append(StreamLayout(stream, tuple(slots_spec)))
+        state = _state_features(domain).fit(records, codec)
+        spec = FeatureSpec(streams=tuple(layouts), domain=domain.name, state=state.to_dict())
+        return cls(spec, codec, state)
 
     @classmethod
-    def from_spec(cls, data: Mapping[str, Any]) -> Featurizer:
+    def from_spec(cls, data: Mapping[str, Any], *, domain: LoadedDomain) -> Featurizer:
         """Rebuild from :meth:`FeatureSpec.to_dict` (as stored in a model file)."""
-        return cls(FeatureSpec.from_dict(data))
+        spec = FeatureSpec.from_dict(data)
+        hook = _state_features(domain)
+        kind = spec.state.get("kind")
+        if kind != hook.kind:
+            raise FeatureError(
+                f"the model's state features are {kind!r}, domain {domain.name!r} computes "
+                f"{hook.kind!r}: retrain the model"
+            )
+        return cls(spec, domain.codec, hook.load(spec.state, domain.codec))
 
     @property
     def spec(self) -> FeatureSpec:
         return self._spec
 
     @property
+    def state(self) -> StateEncoder:
+        return self._state
+
+    @property
     def streams(self) -> tuple[str, ...]:
         return tuple(layout.stream for layout in self._spec.streams)
 
+    @property
+    def scene_width(self) -> int:
+        return self._state.scene_width
+
     def scene_offset(self, stream: str) -> int:
-        """Where the scene features start in the rows of ``stream``."""
-        return self.width(stream) - self._spec.scene_width
+        """Where the state part starts in the rows of ``stream``."""
+        return self.width(stream) - self._state.scene_width
+
+    def slots(self, stream: str) -> list[tuple[str, int]]:
+        """``(kind, width)`` of each input slot of ``stream`` (mask bit included)."""
+        layout = self._layouts.get(stream)
+        if layout is None:
+            return []
+        return [(s.kind, w) for s, w in zip(layout.slots, self._slot_widths[stream], strict=True)]
 
     def width(self, stream: str) -> int:
         """Length of the rows of ``stream``."""
-        layout = self._spec.layout(stream)
-        return (layout.width if layout is not None else 0) + self._spec.scene_width
+        slots = sum(self._slot_widths.get(stream, ()))
+        return slots + self._state.stream_width(stream) + self._state.scene_width
 
     def feature_names(self, stream: str) -> list[str]:
         """A name for each column of ``stream``'s rows (for debugging and reports)."""
         out: list[str] = []
-        layout = self._spec.layout(stream)
+        layout = self._layouts.get(stream)
         for i, slot in enumerate(layout.slots if layout is not None else ()):
             out.append(f"in{i}.unbound")
             if slot.kind == "name":
                 out += [f"in{i}.is_{v}" for v in slot.vocabulary] + [f"in{i}.is_unknown"]
             else:
-                out += [f"in{i}.{slot.kind}[{j}]" for j in range(VALUE_WIDTHS[slot.kind])]
-        if layout is not None and layout.room is not None:
-            out += ["room.unknown", "room.cm", "room.blocks"]
-        for b in self._spec.blocks:
-            out += [f"{b}.{f}" for f in self._block_feature_names()]
-        out += [f"n_on_{p}" for p in self._spec.counted]
-        return out
+                width = self._codec.width(slot.kind, slot.size)
+                out += [f"in{i}.{slot.kind}[{j}]" for j in range(width)]
+        stream_part, scene_part = self._state.feature_names(stream)
+        return out + stream_part + scene_part
 
-    def _block_feature_names(self) -> list[str]:
-        on = [f"on_{p}" for p in self._spec.platforms]
-        return ["present", *on, "held", "x", "y", "cos_yaw", "sin_yaw"]
-
-    def row(
-        self, stream: str, inputs: Sequence[Any | None], context: Mapping[str, Any]
-    ) -> FloatArray:
+    def row(self, stream: str, inputs: Sequence[Any | None], context: Context) -> FloatArray:
         """The feature row of one query of ``stream`` (``None`` inputs are not bound yet)."""
         out = np.zeros(self.width(stream), dtype=np.float32)
-        layout = self._spec.layout(stream)
+        layout = self._layouts.get(stream)
         offset = 0
         if layout is not None:
             if len(inputs) != len(layout.slots):
                 raise FeatureError(
                     f"stream {stream!r} takes {len(layout.slots)} inputs, got {len(inputs)}"
                 )
-            for i, (slot, value) in enumerate(zip(layout.slots, inputs, strict=True)):
-                self._slot(out, offset, stream, i, slot, value)
-                offset += slot.width
-            if layout.room is not None:
-                out[offset : offset + ROOM_WIDTH] = room_left(
-                    inputs[0], inputs[layout.room], context
-                )
-                offset += ROOM_WIDTH
-        self._scene(out, offset, context)
+            widths = self._slot_widths[stream]
+            wheres = self._where[stream]
+            for i, slot in enumerate(layout.slots):
+                value = inputs[i]
+                if value is None:
+                    out[offset] = 1.0  # unbound: mask bit set, features stay zero
+                elif slot.kind == "name":
+                    if not isinstance(value, str):
+                        raise FeatureError(f"{wheres[i]}: expected a name, got {value!r}")
+                    index = self._name_index[stream][i].get(value, len(slot.vocabulary))
+                    out[offset + 1 + index] = 1.0
+                else:
+                    features = self._codec.features(slot.kind, value, slot.size, wheres[i])
+                    out[offset + 1 : offset + 1 + len(features)] = features
+                offset += widths[i]
+        extra = self._state.stream_width(stream)
+        if extra:
+            out[offset : offset + extra] = self._state.stream_features(stream, inputs, context)
+            offset += extra
+        self._state.scene_features(context, out, offset)
+        if layout is not None:
+            self._state.finish_row(stream, inputs, out, self._slot_places[stream])
         return out
 
     def matrix(
-        self, stream: str, queries: Iterable[tuple[Sequence[Any | None], Mapping[str, Any]]]
+        self, stream: str, queries: Iterable[tuple[Sequence[Any | None], Context]]
     ) -> FloatArray:
         """Rows of many ``(inputs, context)`` queries of one stream, shape ``(n, width)``."""
         rows = [self.row(stream, inputs, context) for inputs, context in queries]
         if not rows:
             return np.zeros((0, self.width(stream)), dtype=np.float32)
         return np.stack(rows)
-
-    def _slot(
-        self, out: FloatArray, offset: int, stream: str, i: int, slot: SlotSpec, value: Any
-    ) -> None:
-        if value is None:
-            out[offset] = 1.0  # unbound: mask bit set, features stay zero
-            return
-        where = f"stream {stream!r} input {i}"
-        if slot.kind == "name":
-            if not isinstance(value, str):
-                raise FeatureError(f"{where}: expected a name, got {value!r}")
-            index = self._name_index[stream][i].get(value, len(slot.vocabulary))
-            out[offset + 1 + index] = 1.0
-            return
-        if _kind_of(value) != slot.kind:
-            raise FeatureError(f"{where}: expected a {slot.kind}, got {value!r}")
-        features = _VALUE_FEATURES[slot.kind](value, where)
-        out[offset + 1 : offset + 1 + len(features)] = features
-
-    def _scene(self, out: FloatArray, offset: int, context: Mapping[str, Any]) -> None:
-        facts = context.get("facts", [])
-        values = context.get("values", {})
-        if not isinstance(facts, list) or not isinstance(values, Mapping):
-            raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
-        n_platforms = len(self._spec.platforms)
-        per_block = n_platforms + 6
-        counts = dict.fromkeys(self._spec.counted, 0)
-        for fact in facts:
-            if not isinstance(fact, list) or not fact or not all(isinstance(a, str) for a in fact):
-                raise FeatureError(f"context: malformed fact {fact!r}")
-            predicate, *args = fact
-            for arg in args:
-                if arg in self._block_index:
-                    out[offset + self._block_index[arg] * per_block] = 1.0  # present
-            if not args or args[0] not in self._block_index:
-                continue
-            base = offset + self._block_index[args[0]] * per_block
-            if predicate == "on" and len(args) == 2 and args[1] in self._platform_index:
-                out[base + 1 + self._platform_index[args[1]]] = 1.0
-                if args[1] in counts:
-                    counts[args[1]] += 1
-            elif predicate == "holding":
-                out[base + 1 + n_platforms] = 1.0
-            elif predicate == "at-pose" and len(args) == 2:
-                pose = values.get(args[1])
-                if isinstance(pose, Mapping) and _kind_of(pose) == "pose":
-                    x, y, _z, cos_yaw, sin_yaw = _pose_features(pose, f"context value {args[1]}")
-                    out[base + 2 + n_platforms : base + per_block] = [x, y, cos_yaw, sin_yaw]
-        tail = offset + self._spec.max_blocks * per_block
-        out[tail : tail + len(self._spec.counted)] = [counts[p] for p in self._spec.counted]
-
-
-def room_left(block: Any, platform: Any, context: Mapping[str, Any]) -> list[float]:
-    """``[unknown, room, blocks on it]`` for placing ``block`` on ``platform`` (see the module
-    docstring). Blocks on the platform whose pose is not bound yet count, but leave no mark."""
-    geometry = context.get("geometry")
-    if not isinstance(geometry, Mapping) or not isinstance(platform, str):
-        return [1.0, 0.0, 0.0]
-    footprints, sizes = geometry.get("platforms", {}), geometry.get("blocks", {})
-    if not isinstance(footprints, Mapping) or not isinstance(sizes, Mapping):
-        raise FeatureError("context geometry: expected {'platforms': {...}, 'blocks': {...}}")
-    box, size = footprints.get(platform), sizes.get(block)
-    if box is None or size is None:
-        return [1.0, 0.0, 0.0]
-    xmin, xmax, ymin, ymax = _numbers(box, 4, f"context geometry platform {platform!r}")
-    (half,) = (v / 2 for v in _numbers([size], 1, f"context geometry block {block!r}"))
-    values = context.get("values", {})
-    facts = [f for f in context.get("facts", []) if isinstance(f, list)]
-    on = {f[1] for f in facts if f[:1] == ["on"] and f[2:] == [platform]}
-    on.discard(block)
-    centres = []
-    for fact in facts:
-        if fact[:1] == ["at-pose"] and len(fact) == 3 and fact[1] in on:
-            pose = values.get(fact[2])
-            if isinstance(pose, Mapping) and _kind_of(pose) == "pose":
-                centres.append((float(pose["x"]), float(pose["y"])))
-    if xmax - xmin < 2 * half or ymax - ymin < 2 * half:
-        return [0.0, 0.0, float(len(on))]
-    if not centres:
-        return [0.0, ROOM_CAP, float(len(on))]
-    xs = np.linspace(xmin + half, xmax - half, ROOM_GRID)
-    ys = np.linspace(ymin + half, ymax - half, ROOM_GRID)
-    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 1, 2)
-    nearest = np.linalg.norm(grid - np.asarray(centres)[None, :, :], axis=-1).min(axis=1)
-    return [0.0, float(min(100.0 * nearest.max(), ROOM_CAP)), float(len(on))]

@@ -22,7 +22,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -30,6 +30,10 @@ import torch
 from torch import nn
 
 from planner.learning.features import FEATURE_VERSION, FeatureError, Featurizer
+from planner.learning.priors import Prediction, Prior
+
+if TYPE_CHECKING:
+    from planner.domains.spec import LoadedDomain
 
 MODEL_FORMAT = "guided-tamp/cost-model"  # the "format" field of a model file
 MODEL_FORMAT_VERSION = 1  # layout of the file's dict (not of the features: FEATURE_VERSION)
@@ -62,77 +66,6 @@ def torch_threads(n: int) -> Iterator[None]:
         yield
     finally:
         torch.set_num_threads(before)
-
-
-@dataclass(frozen=True)
-class Prediction:
-    """Predictions for a batch of rows of one stream; costs in seconds."""
-
-    p_s: Float64Array  # success probability
-    r_s: Float64Array  # seconds of a successful query
-    r_f: Float64Array  # seconds of a failed query
-    r_m: Float64Array  # seconds to execute the produced trajectory (0 if none)
-
-    def __post_init__(self) -> None:
-        shapes = {a.shape for a in (self.p_s, self.r_s, self.r_f, self.r_m)}
-        if len(shapes) != 1 or len(next(iter(shapes))) != 1:
-            raise ValueError(f"p_s, r_s, r_f, r_m must be 1-D of one length, got {shapes}")
-
-    def __len__(self) -> int:
-        return len(self.p_s)
-
-
-@dataclass(frozen=True)
-class Prior:
-    """What a stream does on average: used where there is no network (or no data for a head)."""
-
-    p_s: float  # success rate, Laplace-smoothed: (successes + 1) / (queries + 2)
-    r_s: float  # mean seconds of a successful query
-    r_f: float  # mean seconds of a failed query
-    r_m: float  # mean execution seconds of a success's trajectory (0 if none)
-    n: int  # queries it was computed from
-
-    def __post_init__(self) -> None:
-        if not 0.0 < self.p_s < 1.0:
-            raise ValueError(f"prior p_s must be in (0, 1), got {self.p_s}")
-        if min(self.r_s, self.r_f, self.r_m) < 0 or self.n < 0:
-            raise ValueError(f"prior costs and n must be >= 0, got {self}")
-
-    @classmethod
-    def from_outcomes(
-        cls, success: npt.ArrayLike, wall_s: npt.ArrayLike, execution_s: npt.ArrayLike
-    ) -> Prior:
-        """Success rate and mean costs of some queries; a missing outcome borrows the other's
-        mean seconds (a stream that never failed: a failure is assumed to cost what a success
-        does)."""
-        ok = np.asarray(success, dtype=bool)
-        wall = np.asarray(wall_s, dtype=np.float64)
-        execution = np.asarray(execution_s, dtype=np.float64)
-        n = len(ok)
-        overall = float(wall.mean()) if n else 0.0
-        r_s = float(wall[ok].mean()) if ok.any() else overall
-        r_f = float(wall[~ok].mean()) if (~ok).any() else overall
-        moved = execution[ok & (execution > 0)]
-        r_m = float(moved.mean()) if len(moved) else 0.0
-        return cls((int(ok.sum()) + 1) / (n + 2), r_s, r_f, r_m, n)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"p_s": self.p_s, "r_s": self.r_s, "r_f": self.r_f, "r_m": self.r_m, "n": self.n}
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Prior:
-        return cls(
-            float(data["p_s"]),
-            float(data["r_s"]),
-            float(data["r_f"]),
-            float(data["r_m"]),
-            int(data["n"]),
-        )
-
-    def predict(self, n: int) -> Prediction:
-        return Prediction(
-            np.full(n, self.p_s), np.full(n, self.r_s), np.full(n, self.r_f), np.full(n, self.r_m)
-        )
 
 
 class StreamNet(nn.Module):
@@ -297,9 +230,10 @@ class CostModel:
             tmp.unlink(missing_ok=True)
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str], *, domain: str = "kitchen") -> CostModel:
-        """Read a model file written by :meth:`save` for ``domain``; :class:`ModelError` names
-        what is wrong (missing file, not a model file, other domain, other feature version)."""
+    def load(cls, path: str | os.PathLike[str], *, domain: LoadedDomain) -> CostModel:
+        """Read a model file written by :meth:`save` for ``domain`` (its value types and feature
+        hook rebuild the featurizer); :class:`ModelError` names what is wrong (missing file, not a
+        model file, other domain, other feature version)."""
         source = Path(path)
         if not source.is_file():
             raise ModelError(f"no model file at {source}")
@@ -319,9 +253,10 @@ class CostModel:
                 f"{source}: model file format version {data.get('format_version')!r}, this code "
                 f"reads version {MODEL_FORMAT_VERSION}"
             )
-        if data.get("domain") != domain:
+        if data.get("domain") != domain.name:
             raise ModelError(
-                f"{source}: model trained for domain {data.get('domain')!r}, this is {domain!r}"
+                f"{source}: model trained for domain {data.get('domain')!r}, this is "
+                f"{domain.name!r}"
             )
         try:
             spec = data["feature_spec"]
@@ -330,7 +265,7 @@ class CostModel:
                     f"{source}: model uses feature version {spec.get('version')!r}, this code "
                     f"computes version {FEATURE_VERSION}: retrain the model"
                 )
-            featurizer = Featurizer.from_spec(spec)
+            featurizer = Featurizer.from_spec(spec, domain=domain)
             networks = {}
             for stream, entry in data["networks"].items():
                 net = StreamNet(int(entry["n_in"]), int(entry["hidden"]))

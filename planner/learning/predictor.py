@@ -5,10 +5,13 @@ from __future__ import annotations
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.learning.model import CostModel
 from planner.search.learned import StreamCost
+
+if TYPE_CHECKING:
+    from planner.domains.spec import LoadedDomain
 
 
 class ModelPredictor:
@@ -18,7 +21,7 @@ class ModelPredictor:
         self.model = model
 
     @classmethod
-    def load(cls, path: Path, *, domain: str) -> ModelPredictor:
+    def load(cls, path: Path, *, domain: LoadedDomain) -> ModelPredictor:
         return cls(CostModel.load(path, domain=domain))
 
     def predict_rows(

@@ -29,18 +29,17 @@ import numpy.typing as npt
 import torch
 from torch import nn
 
-from planner.domains import problem_for_scene
+from planner.domains import LoadedDomain, problem_for_scene
 from planner.learning.features import FEATURE_VERSION, Featurizer
 from planner.learning.model import (
     COST_HEADS,
     MIN_SECONDS,
     CostModel,
-    Prediction,
-    Prior,
     StreamNet,
     StreamNetwork,
     torch_threads,
 )
+from planner.learning.priors import Prediction, Prior
 from planner.scene import SceneError
 from planner.store import QueryRecord, RunStore
 
@@ -57,7 +56,7 @@ TORCH_THREADS = 1  # deterministic results, and polite to planners sharing the m
 
 class LoadedRecords(list[QueryRecord]):
     """Stream queries read by :func:`load_records`, remembering where they came from (the model
-    file's metadata names the data)."""
+    file's metadata names the data) and the domain of each run."""
 
     def __init__(
         self,
@@ -66,11 +65,15 @@ class LoadedRecords(list[QueryRecord]):
         sources: Sequence[Path] = (),
         run_scenes: Mapping[str, str] | None = None,
         run_seeds: Mapping[str, int] | None = None,
+        run_domains: Mapping[str, str] | None = None,
+        domains_found: Mapping[str, LoadedDomain] | None = None,
     ) -> None:
         super().__init__(records)
         self.sources = tuple(sources)
         self.run_scenes = dict(run_scenes or {})
         self.run_seeds = dict(run_seeds or {})
+        self.run_domains = dict(run_domains or {})  # run id -> domain name ("?": unknown)
+        self.domains_found = dict(domains_found or {})  # domain name -> the loaded domain
 
     def training_seeds(self) -> dict[str, list[int]]:
         """Scene -> the seeds of its runs (benchmarks must hold these out)."""
@@ -80,50 +83,88 @@ class LoadedRecords(list[QueryRecord]):
                 out.setdefault(scene, set()).add(self.run_seeds[run_id])
         return {scene: sorted(seeds) for scene, seeds in sorted(out.items())}
 
+    def domains(self) -> dict[str, int]:
+        """Domain name -> how many of the records' runs are of it."""
+        runs = {r.run_id for r in self}
+        counts: dict[str, int] = {}
+        for run_id in runs:
+            name = self.run_domains.get(run_id, "?")
+            counts[name] = counts.get(name, 0) + 1
+        return dict(sorted(counts.items()))
 
-def _with_static_context(
-    query: QueryRecord, scene: str, cache: dict[str, dict[str, Any]]
-) -> QueryRecord:
-    """The query with its scene's static context (platform footprints, block sizes) where it
-    was recorded without one: stores written before queries carried it train the same model.
-    A scene that no longer loads leaves the query as it is (its room features stay unknown)."""
-    if scene not in cache:
+
+@dataclass
+class _SceneInfo:
+    domain: LoadedDomain | None  # None: the scene no longer loads
+    static: dict[str, Any]
+
+
+def _scene_info(scene: str, domain_ref: str | None, cache: dict[Any, _SceneInfo]) -> _SceneInfo:
+    """The domain and static context of a recorded run's scene (a scene that no longer loads
+    has neither, and says so once in the log)."""
+    key = (scene, domain_ref)
+    if key not in cache:
         try:
-            loaded, problem = problem_for_scene(scene, seed=0)
-            cache[scene] = loaded.static_context(problem)
+            loaded, problem = problem_for_scene(scene, seed=0, domain=domain_ref)
+            cache[key] = _SceneInfo(loaded, loaded.static_context(problem))
         except (OSError, ValueError, KeyError, SceneError) as exc:
-            log.warning("scene %s: no static context for its queries (%s)", scene, exc)
-            cache[scene] = {}
-    missing = {k: v for k, v in cache[scene].items() if k not in query.context}
+            log.warning("scene %s: cannot load it to tell its domain (%s)", scene, exc)
+            cache[key] = _SceneInfo(None, {})
+    return cache[key]
+
+
+def _with_static_context(query: QueryRecord, static: Mapping[str, Any]) -> QueryRecord:
+    """The query with its scene's static context where it was recorded without one: stores
+    written before queries carried it train the same model."""
+    missing = {k: v for k, v in static.items() if k not in query.context}
     if not missing:
         return query
     return dataclasses.replace(query, context={**missing, **query.context})
 
 
-def load_records(db_paths: Sequence[Path]) -> LoadedRecords:
-    """Every stream query in the given run stores (SQLite files), in stored order."""
+def load_records(db_paths: Sequence[Path], *, domain: str | None = None) -> LoadedRecords:
+    """Every stream query in the given run stores (SQLite files), in stored order; with
+    ``domain`` (a domain's name), only the queries of that domain's runs."""
     records: list[QueryRecord] = []
     scenes: dict[str, str] = {}
     seeds: dict[str, int] = {}
+    domains: dict[str, str] = {}
+    loaded_domains: dict[str, LoadedDomain] = {}
     seen: set[tuple[str, int]] = set()
-    static: dict[str, dict[str, Any]] = {}  # scene -> its static context
+    cache: dict[Any, _SceneInfo] = {}
     for raw in db_paths:
         path = Path(raw)
         if not path.is_file():
             raise FileNotFoundError(f"no run store at {path}")
         with RunStore(path) as store:
             queries = store.stream_queries()
+            info: dict[str, _SceneInfo] = {}
             for run_id in sorted({q.run_id for q in queries}):
                 run = store.get_run(run_id)
                 scenes[run_id], seeds[run_id] = run.scene, run.seed
+                ref = run.config.get("domain")
+                info[run_id] = _scene_info(run.scene, ref if isinstance(ref, str) else None, cache)
+                found = info[run_id].domain
+                domains[run_id] = "?" if found is None else found.name
+                if found is not None:
+                    loaded_domains[found.name] = found
+        kept = 0
         for q in queries:
             if (q.run_id, q.seq) in seen:
                 continue  # the same store given twice
             seen.add((q.run_id, q.seq))
-            records.append(_with_static_context(q, scenes[q.run_id], static))
-        log.info("%s: %d stream queries", path, len(queries))
+            if domain is not None and domains[q.run_id] != domain:
+                continue
+            records.append(_with_static_context(q, info[q.run_id].static))
+            kept += 1
+        log.info("%s: %d stream queries (%d kept)", path, len(queries), kept)
     return LoadedRecords(
-        records, sources=[Path(p) for p in db_paths], run_scenes=scenes, run_seeds=seeds
+        records,
+        sources=[Path(p) for p in db_paths],
+        run_scenes=scenes,
+        run_seeds=seeds,
+        run_domains=domains,
+        domains_found=loaded_domains,
     )
 
 
@@ -302,25 +343,25 @@ def split_runs(
 class _Corruption:
     """Per-epoch corruption of training rows (fresh each epoch, seeded).
 
-    Value inputs (poses, grasps, confs) are unbound (zeroed, mask bit set) as the planner asks
-    about streams before their inputs are sampled; the scene part is dropped now and then, as
+    Value inputs (every kind but names: poses, grasps, numbers, ...) are unbound (zeroed, mask
+    bit set) as the planner asks about streams before their inputs are sampled; the state part
+    is dropped now and then, as
     it is constant within a run and a network keys on it to memorise runs; small Gaussian noise
     on every feature smooths the fit. Names (problem objects) are always bound.
     """
 
-    value_slots: tuple[tuple[int, int], ...]  # (offset, width) of each pose/grasp/conf slot
-    scene: tuple[int, int]  # (offset, width) of the scene features
+    value_slots: tuple[tuple[int, int], ...]  # (offset, width) of each value slot
+    scene: tuple[int, int]  # (offset, width) of the state part
 
     @classmethod
     def of(cls, featurizer: Featurizer, stream: str) -> _Corruption:
-        layout = featurizer.spec.layout(stream)
         slots = []
-        offset = 0  # the room-left features after the slots are never corrupted but by noise
-        for slot in layout.slots if layout is not None else ():
-            if slot.kind != "name":
-                slots.append((offset, slot.width))
-            offset += slot.width
-        return cls(tuple(slots), (featurizer.scene_offset(stream), featurizer.spec.scene_width))
+        offset = 0  # the stream part after the slots is never corrupted but by noise
+        for kind, width in featurizer.slots(stream):
+            if kind != "name":
+                slots.append((offset, width))
+            offset += width
+        return cls(tuple(slots), (featurizer.scene_offset(stream), featurizer.scene_width))
 
     def apply(self, x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
         out = x.clone()
@@ -473,17 +514,18 @@ def _evaluate(
 def train(
     records: Sequence[QueryRecord],
     *,
+    domain: LoadedDomain,
     seed: int = 0,
     epochs: int = EPOCHS,
     val_fraction: float = 0.2,
     min_queries: int = 30,
-    domain: str = "kitchen",
     metadata: Mapping[str, Any] | None = None,
 ) -> tuple[CostModel, TrainReport]:
     """Fit one network per stream on the training runs and report on the validation runs.
 
-    ``metadata`` is stored in the model file, on top of what is known: the number of runs and
-    queries, seed, date and, for :func:`load_records` output, the data files and scene names.
+    ``domain`` gives the value types and the state features of the rows. ``metadata`` is
+    stored in the model file, on top of what is known: the number of runs and queries, seed,
+    date and, for :func:`load_records` output, the data files and scene names.
     """
     if not records:
         raise ValueError("no stream queries to train on")

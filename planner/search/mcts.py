@@ -146,6 +146,7 @@ class TreeSearch:
         *,
         emitter: Emitter | None = None,
         encode: Callable[[Any], Any] = repr,
+        describe: Callable[[Any], str] | None = None,
         progress: Callable[[str], None] | None = None,
         should_stop: Callable[[], bool] | None = None,
         fluents: frozenset[str] = frozenset(),
@@ -163,6 +164,7 @@ class TreeSearch:
         self.policy = policy
         self.emitter = emitter
         self.encode = encode
+        self.describe = describe  # a label of an encoded value, for people (events' labels)
         self.progress = progress
         self.should_stop = should_stop
         self.fluents = fluents  # predicates recorded as the context of each query
@@ -194,6 +196,7 @@ class TreeSearch:
         stream = None
         if node.parent != ROOT and node.parent is not None:
             stream = self.skeletons[node.plan_index].stream_plan[node.depth - 1].stream
+        outputs = [self.encode(v) for v in node.outputs.values()]
         self.emitter.emit(
             NodeAdded,
             node_id=node.id,
@@ -202,10 +205,14 @@ class TreeSearch:
             depth=node.depth,
             stream=stream,
             success=node.success,
-            outputs=[self.encode(v) for v in node.outputs.values()],
+            outputs=outputs,
             label=self._label(node),
             output_names=list(node.outputs),
+            output_labels=self._labels(outputs),
         )
+
+    def _labels(self, encoded: list[Any]) -> list[str]:
+        return [] if self.describe is None else [self.describe(v) for v in encoded]
 
     # --- steps -------------------------------------------------------------------------------
 
@@ -261,12 +268,14 @@ class TreeSearch:
         if result.success:
             self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))
         if self.emitter is not None:
+            encoded = [self.encode(v) for v in inputs]
             self.emitter.emit(
                 StreamQueried,
                 node_id=child.id,
                 stream=inst.stream,
                 input_names=list(inst.inputs),
-                inputs=[self.encode(v) for v in inputs],
+                inputs=encoded,
+                input_labels=self._labels(encoded),
                 success=result.success,
                 wall_s=result.wall_s,
                 cpu_s=result.cpu_s,

@@ -5,7 +5,8 @@ Three kinds, as in PDDLStream's ``from_fn``/``from_gen_fn``/``from_test``:
 - :func:`from_fn`: ``fn(*inputs) -> tuple | None``; every query calls it again (a sampler).
 - :func:`from_gen_fn`: ``gen_fn(*inputs) -> Iterator[tuple]``; every query takes the next item
   of one generator per input binding; an exhausted generator is a failed query.
-- :func:`from_test`: ``test(*inputs) -> bool``; a stream with no outputs.
+- :func:`from_test`: ``test(*inputs) -> bool``; a stream with no outputs (a false test may
+  return a :class:`Failure` to say why).
 
 A sampler that finds nothing may return (or yield) :class:`Failure` instead of ``None`` to say
 why; the reason is recorded with the failed query.
@@ -71,7 +72,10 @@ class StreamAdapter:
         """One query: the outputs, or ``None`` / a :class:`Failure` for a failure. May raise
         (the runtime records it)."""
         if self.kind == "test":
-            return () if bool(self._call(inputs, context)) else None
+            verdict = self._call(inputs, context)
+            if isinstance(verdict, Failure):
+                return verdict
+            return () if bool(verdict) else None
         if self.kind == "fn":
             out = self._call(inputs, context)
             return out if out is None or isinstance(out, Failure) else tuple(out)
@@ -102,6 +106,6 @@ def from_gen_fn(gen_fn: Callable[..., Any], *, context: bool = False) -> StreamA
     return StreamAdapter("gen", gen_fn, uses_context=context)
 
 
-def from_test(test: Callable[..., bool], *, context: bool = False) -> StreamAdapter:
-    """A boolean test for a stream with no outputs."""
+def from_test(test: Callable[..., bool | Failure], *, context: bool = False) -> StreamAdapter:
+    """A boolean test for a stream with no outputs (a :class:`Failure` is false, with a reason)."""
     return StreamAdapter("test", test, uses_context=context)

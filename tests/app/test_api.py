@@ -81,7 +81,7 @@ def test_catalogs_and_health(client: TestClient) -> None:
         ({"scene": "line-2", "planner": "magic"}, "planner", "baseline"),
         ({"scene": "line-2", "budget_s": 0}, "budget_s", "greater than"),
         ({"scene": "line-2", "model": "kitchen"}, "model", "only used by the learned"),
-        ({"scene": "line-2", "planner": "learned"}, "model", "domain"),
+        ({"scene": "line-2", "planner": "learned", "model": "kitchen"}, "model", "domain"),
         ({"scene": "kitchen-1", "planner": "learned", "model": "../kitchen"}, "model", "unknown"),
     ],
 )

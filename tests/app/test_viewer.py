@@ -15,14 +15,13 @@ import numpy as np
 import pytest
 
 from app.browser import CHROMIUM_ARGS, require_chromium
-from app.viewer import RunViewer
-from app.viewer_plan import plan_animation
+from app.viewer import NO_VIEW, RunViewer
 from app.viewer_search import NO_PREDICTION, SearchFold
+from planner.api import RunConfig, solve
 from planner.domains import problem_for_scene
-from planner.domains.kitchen import GEOMETRY_KEY
-from planner.domains.kitchen.plan_io import decode, plan_to_dict
+from planner.domains.kitchen.view import plan_timeline
 from planner.events import ListSink, ModelPrediction, NodeAdded, StreamQueried, event_to_dict
-from planner.runs import RunConfig, run
+from planner.plans import parse_plan
 
 pytestmark = pytest.mark.slow
 
@@ -35,16 +34,9 @@ Events = list[dict[str, Any]]
 def kitchen_run() -> tuple[Events, dict[str, Any]]:
     """Events and bound plan of a real baseline run of kitchen-1 (seed 0)."""
     sink = ListSink()
-    result, _, _ = run(
-        RunConfig(scene="kitchen-1", seed=0, planner="baseline", budget_s=120), sink=sink
-    )
-    assert result.bound is not None, result.status
-    plan = plan_to_dict(
-        scene="kitchen-1",
-        seed=0,
-        actions=result.bound.skeleton.actions,
-        values=result.bound.values,
-    )
+    out = solve(RunConfig(scene="kitchen-1", seed=0, planner="baseline", budget_s=120), sink=sink)
+    plan = out.plan_file()
+    assert plan is not None, out.status
     return [event_to_dict(e) for e in sink.events], plan
 
 
@@ -127,7 +119,7 @@ def test_show_a_prefix_then_extend_with_the_rest(
     viewer.show("kitchen-1", 0, prefix, plan)
     counts = viewer.counts
     assert counts["events"] == cut
-    assert {k: counts[k] for k in _expected(prefix)} == _expected(prefix)
+    assert {k: counts.get(k, 0) for k in _expected(prefix)} == _expected(prefix)
     assert counts["confs"] == 1 and counts["motions"] == 1  # the first motion, not the later ones
     assert counts["tree_nodes"] == counts["nodes"]
     assert viewer.plan_seconds is None  # no solution_found yet: the robot stays at its start
@@ -135,7 +127,7 @@ def test_show_a_prefix_then_extend_with_the_rest(
     viewer.extend(rest)
     counts = viewer.counts
     assert counts["events"] == len(events)
-    assert {k: counts[k] for k in _expected(events)} == _expected(events)
+    assert {k: counts.get(k, 0) for k in _expected(events)} == _expected(events)
     added = sum(e["type"] == "node_added" for e in events)
     assert counts["nodes"] == added + 1  # and the root, which the planner never announces
     assert counts["tree_nodes"] == counts["nodes"] and counts["hidden"] == 0
@@ -153,10 +145,11 @@ def test_the_plan_plays_for_its_duration(
     assert seconds > 1.0
     assert viewer.playhead == 0.0
 
-    _, problem = problem_for_scene("kitchen-1", seed=0)
-    anim = plan_animation(plan, problem.values[GEOMETRY_KEY], 0)
+    loaded, problem = problem_for_scene("kitchen-1", seed=0)
+    parsed = parse_plan(plan, "plan")
+    anim = plan_timeline(parsed.actions, parsed.decoded_values(loaded), problem)
     cook = next(a for a in plan["actions"] if a.startswith("(cook"))
-    stove_pose = decode(plan["values"][cook.split()[2]], "cook pose")
+    stove_pose = loaded.decode(plan["values"][cook.split()[2]], "cook pose")
     start, end = anim.state_at(0.0), anim.state_at(anim.duration)
     assert start.blocks["b1"] != stove_pose and start.held is None
     assert end.blocks["b1"] == stove_pose and end.held is None  # cooked on the stove
@@ -172,13 +165,13 @@ def test_a_failed_query_is_marked(
     counts = viewer.counts
     assert counts["failed"] == 1
     assert counts["failed_marked"] == 1
-    assert counts["confs"] == _expected(events)["confs"]  # a failed IK draws no base pose
+    assert counts.get("confs", 0) == _expected(events)["confs"]  # a failed IK draws no base pose
 
 
 def test_nodes_are_coloured_by_predicted_cost(kitchen_run: tuple[Events, dict[str, Any]]) -> None:
     events, _ = kitchen_run
-    _, problem = problem_for_scene("kitchen-1", seed=0)
-    fold = SearchFold(problem.values[GEOMETRY_KEY], 0)
+    loaded, problem = problem_for_scene("kitchen-1", seed=0)
+    fold = SearchFold(loaded, problem, loaded.spec.view)
     for e in events:
         fold.fold(e)
     nodes = sorted(n for n in fold.nodes if fold.nodes[n].parent_id is not None)
@@ -205,6 +198,7 @@ def test_other_domains_unknown_scenes_and_garbage_do_not_raise(
     events, plan = kitchen_run
     viewer.show("line-2", 0, events[:5], None)
     assert viewer.counts["nodes"] == 0 and viewer.counts["events"] == 5
+    assert NO_VIEW in viewer.note
     viewer.extend(events[5:7])
     assert viewer.counts["events"] == 7
     viewer.show("no-such-scene", 0, events, plan)
@@ -264,7 +258,7 @@ def test_calls_from_many_threads(
     viewer.show("kitchen-1", 0, events, plan)
     counts = viewer.counts
     assert counts["events"] == len(events) and counts["skipped"] == 0
-    assert {k: counts[k] for k in _expected(events)} == _expected(events)
+    assert {k: counts.get(k, 0) for k in _expected(events)} == _expected(events)
 
 
 def test_the_view_renders_in_a_browser_and_plays(
@@ -302,3 +296,32 @@ def test_the_view_renders_in_a_browser_and_plays(
     pixels = image[..., :3].reshape(-1, 3)
     colours = np.unique(pixels[::97], axis=0)
     assert len(colours) > 20, "the screenshot is (nearly) one colour"
+
+
+def test_the_tutorial_domain_is_drawn_from_its_scene_description(viewer: RunViewer) -> None:
+    """The tabletop's view hook: boxes on a plane, ghosts of its sampled placements, gripper
+    configurations and paths, and its plan played by keyframes."""
+    tutorial = str(Path(__file__).resolve().parents[2] / "examples" / "tabletop2d")
+    sink = ListSink()
+    config = RunConfig(scene="tabletop-3", seed=2, planner="baseline", budget_s=60, domain=tutorial)
+    out = solve(config, sink=sink)
+    plan = out.plan_file()
+    assert plan is not None, out.status
+    events = [event_to_dict(e) for e in sink.events]
+    viewer.show("tabletop-3", 2, events, plan, domain=tutorial)
+    assert viewer.note == ""
+    counts = viewer.counts
+    sampled = sum(
+        1
+        for e in events
+        if e["type"] == "node_added" and e["success"] and e["stream"] == "sample-pose"
+    )
+    assert counts["placements"] == sampled > 0
+    assert counts["motions"] > 0 and counts["confs"] > 0
+    assert counts["skipped"] == 0
+    failed = sum(1 for e in events if e["type"] == "node_added" and e["success"] is False)
+    assert counts["failed"] == failed and counts["failed_marked"] == failed
+    moves = [a for a in out.actions if a.name == "move"]
+    assert viewer.plan_seconds == pytest.approx(
+        sum(out.values[a.args[2]].seconds for a in moves) + 0.5 * (len(out.actions) - len(moves))
+    )

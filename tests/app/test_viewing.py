@@ -20,7 +20,15 @@ class RecordingViewer:
     def __init__(self) -> None:
         self.calls: list[tuple[str, Any]] = []
 
-    def show(self, scene: str, seed: int, events: Any, plan: dict[str, Any] | None) -> None:
+    def show(
+        self,
+        scene: str,
+        seed: int,
+        events: Any,
+        plan: dict[str, Any] | None,
+        *,
+        domain: str | None = None,
+    ) -> None:
         self.calls.append(("show", ([e["seq"] for e in events], plan)))
 
     def extend(self, events: Any) -> None:

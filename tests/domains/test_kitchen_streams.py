@@ -12,13 +12,13 @@ import pytest
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.domains import problem_for_scene
-from planner.domains.kitchen import GEOMETRY_KEY
 from planner.domains.kitchen.geometry import BlockPose
-from planner.domains.kitchen.plan_io import read_plan, write_plan
+from planner.domains.kitchen.problem import GEOMETRY_KEY
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig
 from planner.domains.kitchen.validate import validate_plan
 from planner.domains.kitchen.values import Conf, Grasp, Trajectory
 from planner.pddl import Atom
+from planner.plans import plan_to_dict, read_plan, write_plan
 from planner.search import BoundPlan, bind_sequentially
 from planner.streams import Failure, StreamContext
 
@@ -49,12 +49,21 @@ def test_kitchen_1_binds_and_validates(kitchen1: tuple[object, object, BoundPlan
 def test_plan_file_round_trip_validates(
     kitchen1: tuple[object, object, BoundPlan], tmp_path: Path
 ) -> None:
-    _, _, bound = kitchen1
+    loaded, _, bound = kitchen1
     path = tmp_path / "plan.json"
-    write_plan(path, scene="kitchen-1", seed=0, actions=bound.skeleton.actions, values=bound.values)
+    data = plan_to_dict(
+        loaded=loaded,  # type: ignore[arg-type]
+        scene="kitchen-1",
+        seed=0,
+        plan=bound.skeleton,
+        values=bound.values,
+    )
+    write_plan(path, data)
     plan = read_plan(path)
-    problem = problem_for_scene(plan.scene, seed=plan.seed)[1]
-    assert validate_plan(plan.actions, plan.values, problem).ok
+    loaded_again, problem = problem_for_scene(plan.scene, seed=plan.seed, domain=plan.domain)
+    values = plan.decoded_values(loaded_again)
+    assert values == {k: v for k, v in bound.values.items() if k in values}
+    assert validate_plan(plan.actions, values, problem).ok
 
 
 def test_validation_reports_the_first_violation(kitchen1: tuple[object, object, BoundPlan]) -> None:

@@ -1,4 +1,5 @@
-"""Rendering a kitchen to a PNG: a valid image of the asked size that shows every body."""
+"""Rendering a domain's scene description to a PNG (the kitchen's): a valid image of the asked
+size that shows every body."""
 
 from __future__ import annotations
 
@@ -8,8 +9,20 @@ from pathlib import Path
 
 import pytest
 
-from planner.domains.kitchen.render import RenderInfo, render_scene
+from planner.cli import main
+from planner.domains import problem_for_scene
 from planner.scene import SceneError
+from planner.sim.render import RenderInfo
+from planner.sim.render import render_scene as render_view
+
+
+def render_scene(
+    scene: str, *, seed: int, out: Path, width: int = 960, height: int = 720
+) -> RenderInfo:
+    loaded, problem = problem_for_scene(scene, seed=seed)
+    assert loaded.spec.view is not None
+    return render_view(loaded.spec.view.scene(problem), out=out, width=width, height=height)
+
 
 WIDTH, HEIGHT = 480, 360
 MIN_PIXELS = 30  # "clearly visible" for a 7 cm block at this size (it covers ~190 pixels)
@@ -49,7 +62,7 @@ def test_render_writes_a_png_of_the_asked_size(seed3: RenderInfo) -> None:
 
 @pytest.mark.slow
 def test_robot_fixtures_and_every_block_are_visible(seed3: RenderInfo) -> None:
-    expected = {"robot", "table", "sink", "stove", "b1", "b2", "b3", "b4"}
+    expected = {"pr2", "platform-table", "platform-sink", "platform-stove", "b1", "b2", "b3", "b4"}
     assert set(seed3.pixels) == expected
     small = {name: n for name, n in seed3.pixels.items() if n < MIN_PIXELS}
     assert not small, f"barely visible: {small}"
@@ -78,3 +91,11 @@ def test_missing_output_directory_is_named(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match=f"directory {missing} does not exist"):
         render_scene("kitchen-4", seed=0, out=missing / "x.png")
     assert not missing.exists()
+
+
+def test_a_domain_without_a_view_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["render", "--scene", "line-2", "--out", str(tmp_path / "x.png")]) == 2
+    assert "domain 'line' has no scene description" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()

@@ -13,11 +13,13 @@ import numpy as np
 import pytest
 import torch
 
+from planner.domains import load_domain
 from planner.learning.features import FEATURE_VERSION, FeatureError, Featurizer
 from planner.learning.model import CostModel, ModelError
 from planner.learning.train import TrainReport, auc, format_report, split_runs, train
 from planner.store import QueryRecord
 
+KITCHEN = load_domain("kitchen")  # these are the kitchen's own features (its feature hook)
 PLATFORMS = ("table", "sink", "stove")
 ARM = [0.0, 1.17, -3.34, -2.25, 0.0, -1.7, 0.0]
 
@@ -118,7 +120,7 @@ def data() -> list[QueryRecord]:
 
 @pytest.fixture(scope="module")
 def trained(data: list[QueryRecord]) -> tuple[CostModel, TrainReport]:
-    return train(data, seed=0, epochs=300)
+    return train(data, domain=KITCHEN, seed=0, epochs=300)
 
 
 # --- features --------------------------------------------------------------------------------
@@ -127,7 +129,7 @@ def trained(data: list[QueryRecord]) -> tuple[CostModel, TrainReport]:
 def test_rows_have_a_fixed_length_per_stream_and_mask_unbound_inputs(
     data: list[QueryRecord],
 ) -> None:
-    featurizer = Featurizer.fit(data)
+    featurizer = Featurizer.fit(data, domain=KITCHEN)
     ik = next(r for r in data if r.stream == "inverse-kinematics")
     names = featurizer.feature_names("inverse-kinematics")
     width = featurizer.width("inverse-kinematics")
@@ -166,7 +168,7 @@ def test_a_placement_sees_the_room_left_on_its_platform() -> None:
     geometry: three blocks in three corners of a 22 cm stove leave the fourth corner free (its
     centre 15 cm from theirs); one in the middle of an edge leaves no spot more than ~8 cm from
     a block, too close for a 7 cm block that may be turned."""
-    featurizer = Featurizer.fit([])
+    featurizer = Featurizer.fit([], domain=KITCHEN)
     names = featurizer.feature_names("sample-placement")
     geometry = {"platforms": {"stove": [-0.11, 0.11, -1.26, -1.04]}, "blocks": {"b4": 0.07}}
 
@@ -197,7 +199,7 @@ def test_a_placement_sees_the_room_left_on_its_platform() -> None:
 
 
 def test_scene_features_read_the_facts() -> None:
-    featurizer = Featurizer.fit([])
+    featurizer = Featurizer.fit([], domain=KITCHEN)
     context = {
         "facts": [
             ["at-pose", "b1", "p1"],
@@ -228,11 +230,11 @@ def test_scene_features_read_the_facts() -> None:
 
 
 def test_feature_spec_round_trips_through_a_plain_dict(data: list[QueryRecord]) -> None:
-    featurizer = Featurizer.fit(data)
+    featurizer = Featurizer.fit(data, domain=KITCHEN)
     spec = json.loads(json.dumps(featurizer.spec.to_dict()))
-    again = Featurizer.from_spec(spec)
+    again = Featurizer.from_spec(spec, domain=KITCHEN)
     assert again.spec == featurizer.spec
-    assert spec["version"] == FEATURE_VERSION and spec["max_blocks"] == 8
+    assert spec["version"] == FEATURE_VERSION and spec["state"]["max_blocks"] == 8
     for r in data[:50]:
         assert np.array_equal(
             again.row(r.stream, r.inputs, r.context), featurizer.row(r.stream, r.inputs, r.context)
@@ -311,7 +313,7 @@ def test_split_is_by_run(trained: tuple[CostModel, TrainReport], data: list[Quer
 def test_too_few_queries_gets_the_prior_and_a_warning(caplog: pytest.LogCaptureFixture) -> None:
     records = _Runs(10, seed=3, grasp_runs=4).records
     with caplog.at_level(logging.WARNING, logger="planner.learning.train"):
-        model, report = train(records, seed=0, epochs=5, min_queries=30)
+        model, report = train(records, domain=KITCHEN, seed=0, epochs=5, min_queries=30)
     warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
     assert any("sample-grasp" in m and "min_queries=30" in m for m in warned)
     assert report.stream("sample-grasp").prior_used
@@ -330,9 +332,9 @@ def test_too_few_queries_gets_the_prior_and_a_warning(caplog: pytest.LogCaptureF
 
 def test_training_is_deterministic_given_the_seed(data: list[QueryRecord]) -> None:
     small = data[:200]
-    a, _ = train(small, seed=5, epochs=20, min_queries=10)
-    b, _ = train(small, seed=5, epochs=20, min_queries=10)
-    c, _ = train(small, seed=6, epochs=20, min_queries=10)
+    a, _ = train(small, domain=KITCHEN, seed=5, epochs=20, min_queries=10)
+    b, _ = train(small, domain=KITCHEN, seed=5, epochs=20, min_queries=10)
+    c, _ = train(small, domain=KITCHEN, seed=6, epochs=20, min_queries=10)
     motions = [(r.inputs, r.context) for r in small if r.stream == "plan-motion"]
     rows = a.featurizer.matrix("plan-motion", motions)
     assert np.array_equal(a.predict("plan-motion", rows).r_m, b.predict("plan-motion", rows).r_m)
@@ -350,7 +352,7 @@ def test_save_and_load_give_identical_predictions(
     model, _ = trained
     path = tmp_path / "models" / "kitchen.pt"
     model.save(path)
-    loaded = CostModel.load(path)
+    loaded = CostModel.load(path, domain=KITCHEN)
     assert loaded.streams == model.streams
     assert loaded.metadata == model.metadata
     assert loaded.metadata["runs"] == 40 and loaded.metadata["seed"] == 0
@@ -380,35 +382,35 @@ def test_loading_the_wrong_file_names_the_mismatch(
     path = tmp_path / "model.pt"
     model.save(path)
     with pytest.raises(ModelError, match="model trained for domain 'kitchen', this is 'line'"):
-        CostModel.load(path, domain="line")
+        CostModel.load(path, domain=load_domain("line"))
 
     _rewrite(path, feature_version=FEATURE_VERSION + 1)
     with pytest.raises(ModelError, match=f"feature version {FEATURE_VERSION + 1}"):
-        CostModel.load(path)
+        CostModel.load(path, domain=KITCHEN)
 
     model.save(path)
     _rewrite(path, domain="blocksworld")
     with pytest.raises(ModelError, match="trained for domain 'blocksworld', this is 'kitchen'"):
-        CostModel.load(path)
+        CostModel.load(path, domain=KITCHEN)
 
     missing = tmp_path / "nope.pt"
     with pytest.raises(ModelError, match=str(missing)):
-        CostModel.load(missing)
+        CostModel.load(missing, domain=KITCHEN)
 
     text = tmp_path / "notes.pt"
     text.write_text("not a model")
     with pytest.raises(ModelError, match="not a cost-model file"):
-        CostModel.load(text)
+        CostModel.load(text, domain=KITCHEN)
     torch.save({"weights": torch.zeros(3)}, text)
     with pytest.raises(ModelError, match="not a cost-model file"):
-        CostModel.load(text)
+        CostModel.load(text, domain=KITCHEN)
 
 
 def test_a_store_recorded_without_geometry_gets_it_from_the_runs_scene(tmp_path: Path) -> None:
     """Stores written before queries carried their scene's static context still train the
     same model: loading fills it in from the run's scene (kitchen-1's 22 cm stove)."""
+    from planner.domains.kitchen.features import room_left
     from planner.events import StreamQueried
-    from planner.learning.features import room_left
     from planner.learning.train import load_records
     from planner.store import RunStore
 

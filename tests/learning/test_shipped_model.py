@@ -10,12 +10,13 @@ import sys
 import numpy as np
 import pytest
 
+from planner.domains import load_domain
+from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
-from planner.runs import DEFAULT_MODEL
 
 
 def test_shipped_model_predicts_every_kitchen_stream() -> None:
-    model = CostModel.load(DEFAULT_MODEL, domain="kitchen")
+    model = CostModel.load(DEFAULT_MODEL, domain=load_domain("kitchen"))
     for stream in ("sample-grasp", "sample-placement", "inverse-kinematics", "plan-motion"):
         assert stream in model.streams
         width = model.featurizer.width(stream)

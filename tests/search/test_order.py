@@ -4,14 +4,17 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.abstract.skeleton import AbstractPlan
+from planner.api import RunConfig
 from planner.domains import LoadedDomain, problem_for_scene
+from planner.domains.kitchen import MODEL
 from planner.pddl.structs import Atom, Problem
-from planner.runs import DEFAULT_MODEL, RunConfig, _model_order
+from planner.planners import PlanningTask, model_order
 from planner.search.binding import stream_contexts
 from planner.search.learned import StreamCost
 from planner.search.order import dependencies, order_streams, seconds_per_failure
@@ -127,17 +130,13 @@ def test_the_shipped_model_orders_kitchen_4_tests_before_motions() -> None:
     from planner.learning.predictor import ModelPredictor
 
     plans, states, initial, (loaded, problem) = kitchen("kitchen-4", k=2)
-    predictor = ModelPredictor.load(DEFAULT_MODEL, domain="kitchen")
+    predictor = ModelPredictor.load(MODEL, domain=loaded)
     unread = loaded.spec.unread
-    ordered, ordered_states = _model_order(
-        predictor,
-        plans,
-        states,
-        initial,
-        FLUENTS,
-        loaded.static_context(problem),
-        unread,
+    task = PlanningTask(
+        loaded, problem, plans, dict(initial), 0.0, loaded.static_context(problem), list(states)
     )
+    task = model_order(task, predictor)
+    ordered, ordered_states = task.plans, task.states
     for plan, plan_states in zip(ordered, ordered_states, strict=True):
         kinds = [s.stream for s in plan.stream_plan]
         first_motion = kinds.index("plan-motion")
@@ -179,15 +178,21 @@ def test_an_unknown_order_or_a_model_order_for_sequential_is_refused() -> None:
     assert RunConfig(scene="kitchen-1", order="model").stream_order == "model"
 
 
-def test_a_domain_whose_unread_names_an_unknown_stream_is_refused(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    import planner.domains as domains
-    from planner.domains import kitchen as kitchen_domain
+def test_a_domain_whose_unread_names_an_unknown_stream_is_refused(tmp_path: Path) -> None:
+    import shutil
 
-    typo = replace(kitchen_domain.SPEC, unread={"sample-placment": ("at-conf",)})
-    monkeypatch.setattr(domains, "_registry", lambda: {"kitchen": typo})
+    from planner.domains import DomainLoadError, load_domain
+
+    kitchen_dir = load_domain("kitchen").directory
+    for name in ("domain.pddl", "stream.pddl"):
+        shutil.copy(kitchen_dir / name, tmp_path / name)
+    (tmp_path / "domain.py").write_text(
+        "from dataclasses import replace\n"
+        "from planner.domains.kitchen import DOMAIN as KITCHEN\n"
+        "DOMAIN = replace(KITCHEN, unread={'sample-placment': ('at-conf',)}, directory=None)\n",
+        encoding="utf-8",
+    )
     with pytest.raises(
-        ValueError, match=r"unread names streams not in .*stream\.pddl: sample-placment"
+        DomainLoadError, match=r"unread names streams not in .*stream\.pddl: sample-placment"
     ):
-        domains.get_domain("kitchen")
+        load_domain(tmp_path)

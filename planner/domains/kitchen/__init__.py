@@ -1,85 +1,33 @@
-"""The PR2 kitchen: blocks are cleaned at the sink and cooked on the stove."""
+"""The PR2 kitchen: blocks are cleaned at the sink and cooked on the stove.
+
+The domain object :data:`DOMAIN` is registered through the ``guided_tamp.domains`` entry point
+like any other domain; pybullet is imported only when samplers or the validator are used.
+"""
 
 from __future__ import annotations
 
 import random
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
-from planner.domains import DomainSpec
-from planner.domains.kitchen.geometry import KitchenGeometry, geometry_from_scene
-from planner.domains.kitchen.values import Conf
-from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
-from planner.scene import Scene, goal_atoms
-from planner.sim.pr2_model import REST_ARM_CONF
+from planner.abstract.skeleton import GroundAction
+from planner.domains.kitchen.codec import VALUE_TYPES
+from planner.domains.kitchen.features import KitchenFeatures
+from planner.domains.kitchen.problem import (
+    ARM,
+    GEOMETRY_KEY,
+    START_CONF,
+    initial_pose_name,
+    problem_from_scene,
+    static_context,
+)
+from planner.domains.kitchen.view import KitchenView
+from planner.domains.spec import DomainSpec, PlanCheck
+from planner.pddl.structs import Problem
 from planner.streams.adapters import StreamAdapter
 
-GEOMETRY_KEY = "__kitchen_geometry__"  # where a kitchen problem keeps its geometry in values
-
-START_CONF = "q0"  # the robot's initial base and arm configuration
-ARM = "right"  # the arm that works; the other stays tucked
-
-
-def problem_from_scene(scene: Scene, domain: Domain, seed: int = 0) -> Problem:
-    """Objects, initial facts and goal of a kitchen scene (its geometry is checked too).
-
-    ``seed`` draws the initial block poses; they are the values of the ``p0-*`` objects.
-    """
-    geometry = geometry_from_scene(scene)
-    poses = geometry.initial_poses(seed)
-    values: dict[str, object] = {
-        START_CONF: Conf(geometry.robot.base, geometry.robot.torso, REST_ARM_CONF[ARM]),
-        GEOMETRY_KEY: geometry,
-    }
-    init: set[Atom] = {
-        Atom("conf", (START_CONF,)),
-        Atom("at-conf", (START_CONF,)),
-        Atom("hand-empty"),
-        Atom("can-move"),
-    }
-    objects = [TypedName(START_CONF)]
-    for plat in geometry.platforms:
-        objects.append(TypedName(plat.name))
-        init.add(Atom("platform", (plat.name,)))
-        if plat.kind in ("sink", "stove"):
-            init.add(Atom(plat.kind, (plat.name,)))
-    names = {p.name for p in geometry.platforms} | {START_CONF}
-    for block in geometry.blocks:
-        pose = initial_pose_name(block.name)
-        names |= {block.name, pose}
-        values[pose] = poses[block.name]
-        objects += [TypedName(block.name), TypedName(pose)]
-        init |= {
-            Atom("block", (block.name,)),
-            Atom("pose", (block.name, pose)),
-            Atom("supported", (block.name, pose, block.start)),
-            Atom("at-pose", (block.name, pose)),
-            Atom("on", (block.name, block.start)),
-        }
-    arity = {p.name: p.arity for p in domain.predicates}
-    goal = tuple(Literal(Atom(p, a)) for p, a in goal_atoms(scene, arity, names))
-    return Problem(
-        scene.name, domain.name, tuple(objects), frozenset(init), goal, scene.source, values
-    )
-
-
-def initial_pose_name(block: str) -> str:
-    """The object naming a block's initial pose (its value depends on the seed)."""
-    return f"p0-{block}"
-
-
-def static_context(problem: Problem) -> dict[str, Any]:
-    """``{"geometry": {"platforms": {name: [xmin, xmax, ymin, ymax]}, "blocks": {name: edge}}}``:
-    the parts of the scene a learned model reads to tell how much room a platform has left."""
-    geometry = problem.values.get(GEOMETRY_KEY)
-    if not isinstance(geometry, KitchenGeometry):
-        raise ValueError(f"problem {problem.name}: no kitchen geometry in its values")
-    return {
-        "geometry": {
-            "platforms": {p.name: [round(v, 6) for v in p.footprint()] for p in geometry.platforms},
-            "blocks": {b.name: b.size for b in geometry.blocks},
-        }
-    }
+MODEL = Path(__file__).resolve().parent / "model.pt"  # the shipped model (docs/learning.md)
 
 
 def _bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
@@ -88,10 +36,34 @@ def _bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapte
     return bindings(problem, rng)
 
 
-SPEC = DomainSpec(
+def validate(
+    actions: Sequence[GroundAction], values: Mapping[str, Any], problem: Problem
+) -> PlanCheck:
+    """Replay the plan in simulation (planner/domains/kitchen/validate.py)."""
+    from planner.domains.kitchen.validate import validate_plan
+
+    report = validate_plan(actions, values, problem)
+    return PlanCheck(report.ok, report.message, report.execution_s)
+
+
+DOMAIN = DomainSpec(
     name="kitchen",
+    description="the PR2 kitchen: clean blocks at the sink, cook them on the stove",
     problem_from_scene=problem_from_scene,
     bindings=_bindings,
+    value_types=VALUE_TYPES,
+    validate=validate,
+    static_context=static_context,
+    view=KitchenView(),
+    features=KitchenFeatures(),
+    # What each stream's inputs are (a stream may go unrecorded in a model's training data).
+    input_kinds={
+        "sample-grasp": ("name",),
+        "sample-placement": ("name", "name"),
+        "inverse-kinematics": ("name", "pose", "grasp"),
+        "plan-motion": ("conf", "conf"),
+    },
+    model=MODEL,
     diversity_ignore=("move",),  # moves only connect configurations; compare what is done
     # Where the robot stands and how it holds the block do not change where a block fits.
     evidence_ignore=("at-conf", "can-move", "holding"),
@@ -99,5 +71,6 @@ SPEC = DomainSpec(
     # stands or how it holds the block: it can be sampled before that block's grasp and IK, so
     # the blocks' placements come together and a full stove is blamed on the placements alone.
     unread={"sample-placement": ("at-conf", "can-move", "holding")},
-    static_context=static_context,
 )
+
+__all__ = ["ARM", "DOMAIN", "GEOMETRY_KEY", "MODEL", "START_CONF", "initial_pose_name"]

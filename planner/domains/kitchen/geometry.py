@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner.scene import Scene, check_name
+from planner.sim.transforms import Pose, quat_from_yaw
 
 PLATFORM_KINDS = ("table", "sink", "stove")  # every kitchen has at least one of each
 Color = tuple[float, float, float, float]
@@ -59,6 +60,11 @@ class BlockPose:
     y: float
     z: float
     yaw: float
+
+
+def block_pose_to_pose(pose: BlockPose) -> Pose:
+    """A block pose as a (position, xyzw quaternion) pose."""
+    return ((pose.x, pose.y, pose.z), quat_from_yaw(pose.yaw))
 
 
 @dataclass(frozen=True)

@@ -16,11 +16,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from planner.domains.kitchen import GEOMETRY_KEY
-from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry
+from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
+from planner.domains.kitchen.problem import GEOMETRY_KEY
 from planner.domains.kitchen.routes import BaseRoutes
 from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
-from planner.domains.kitchen.world import KitchenWorld, block_pose_to_pose
+from planner.domains.kitchen.world import KitchenWorld
 from planner.pddl.structs import Problem
 from planner.sim.ik import arm_ik
 from planner.sim.motion import (

@@ -9,10 +9,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner.abstract.skeleton import GroundAction
-from planner.domains.kitchen import GEOMETRY_KEY
-from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry
+from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
+from planner.domains.kitchen.problem import GEOMETRY_KEY
 from planner.domains.kitchen.values import Conf, Grasp, Trajectory
-from planner.domains.kitchen.world import KitchenWorld, block_pose_to_pose
+from planner.domains.kitchen.world import KitchenWorld
 from planner.pddl.structs import Problem
 from planner.sim.transforms import angle_between, multiply, wrap_angle
 

@@ -7,7 +7,7 @@ from collections.abc import Iterable, Mapping
 
 import pybullet as p
 
-from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry
+from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
 from planner.domains.kitchen.values import Conf, Grasp
 from planner.sim import bodies
 from planner.sim.pr2_model import (
@@ -20,15 +20,11 @@ from planner.sim.pr2_model import (
     TORSO_JOINT,
     URDF_PATH,
 )
-from planner.sim.transforms import Pose, invert, multiply, planar_pose, quat_from_yaw
+from planner.sim.transforms import Pose, invert, multiply, planar_pose
 
 log = logging.getLogger(__name__)
 
 PENETRATION = -0.001  # bodies overlapping by more than 1 mm collide; resting contact does not
-
-
-def block_pose_to_pose(pose: BlockPose) -> Pose:
-    return ((pose.x, pose.y, pose.z), quat_from_yaw(pose.yaw))
 
 
 class KitchenWorld:

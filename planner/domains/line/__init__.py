@@ -95,4 +95,9 @@ def bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter
     return {"sample-pose": from_fn(sample_pose), "test-reachable": from_test(reachable)}
 
 
-SPEC = DomainSpec(name="line", problem_from_scene=problem_from_scene, bindings=bindings)
+DOMAIN = DomainSpec(
+    name="line",
+    description="blocks on a 1-D line, picked and placed into regions (a test domain)",
+    problem_from_scene=problem_from_scene,
+    bindings=bindings,
+)

@@ -1,9 +1,8 @@
-"""Render a kitchen scene to a PNG, headless, with pybullet's software renderer.
+"""Render a domain's scene to a PNG, headless, with pybullet's software renderer.
 
-The scene is built as for planning (:class:`KitchenWorld`), the blocks are put at their seeded
-initial poses and the robot at its start configuration; a grey floor is added and a camera is
-placed beyond the table, facing the robot, looking down at about 45 degrees, far enough back that
-every body fits.
+The bodies of the scene description (:class:`planner.view.SceneView`, a domain's ``view`` hook)
+are built at their start poses; a grey floor is added and a camera is placed looking down at
+about 45 degrees, far enough back that every body fits.
 The PNG is written with ``zlib`` and ``struct`` (no imaging library needed).
 """
 
@@ -22,18 +21,11 @@ import numpy as np
 import numpy.typing as npt
 import pybullet as p
 
-from planner.domains import get_domain
-from planner.domains.kitchen import ARM, GEOMETRY_KEY, START_CONF
-from planner.domains.kitchen.geometry import KitchenGeometry
-from planner.domains.kitchen.values import Conf
-from planner.domains.kitchen.world import KitchenWorld
-from planner.scene import load_scene
 from planner.sim import bodies
 from planner.sim.transforms import Vec3
+from planner.view import Body, Box, Mesh, SceneView
 
 log = logging.getLogger(__name__)
-
-ROBOT = "robot"  # the robot's name in RenderInfo.pixels
 
 FOV_DEG = 35.0  # vertical field of view of the camera; narrow enough to keep boxes boxy
 PITCH_DEG = 45.0  # the camera looks down this far below the horizontal
@@ -56,56 +48,90 @@ class RenderInfo:
     path: Path
     width: int
     height: int
-    pixels: Mapping[str, int]  # robot, each platform, each block -> pixels it covers
+    pixels: Mapping[str, int]  # body name -> pixels it covers
 
     def hidden(self, min_pixels: int = 1) -> tuple[str, ...]:
         """Names of the bodies covering fewer than ``min_pixels`` pixels."""
         return tuple(name for name, n in self.pixels.items() if n < min_pixels)
 
 
-def render_scene(
-    scene_name_or_path: str, *, seed: int, out: Path, width: int = 960, height: int = 720
-) -> RenderInfo:
-    """Render the scene with its blocks at the poses drawn by ``seed`` and write a PNG to ``out``.
+def render_scene(view: SceneView, *, out: Path, width: int = 960, height: int = 720) -> RenderInfo:
+    """Render a domain's scene description (its ``view`` hook's :class:`SceneView`: boxes,
+    meshes, URDFs at their start poses) and write a PNG to ``out``.
 
-    Raises :class:`~planner.scene.SceneError` for an unknown or invalid scene (or one that is not
-    a kitchen) and :class:`ValueError` when ``out``'s directory does not exist or the size is not
-    positive.
+    Raises :class:`ValueError` when ``out``'s directory does not exist, the size is not
+    positive or a body cannot be built (a mesh or URDF that does not load).
     """
     out = Path(out)
     if not out.parent.is_dir():
         raise ValueError(f"cannot write {out}: directory {out.parent} does not exist")
     if width <= 0 or height <= 0:
         raise ValueError(f"image size must be positive, got {width}x{height}")
+    if not view.bodies:
+        raise ValueError("the scene description has no bodies to render")
     start = time.perf_counter()
-    scene = load_scene(scene_name_or_path)
-    problem = get_domain("kitchen").problem_from_scene(scene, seed=seed)
-    geometry = problem.values[GEOMETRY_KEY]
-    conf = problem.values[START_CONF]
-    if not isinstance(geometry, KitchenGeometry) or not isinstance(conf, Conf):
-        raise TypeError(f"{scene.source}: the kitchen problem lacks its geometry or start conf")
-    with KitchenWorld(geometry, ARM) as world:
-        world.set_blocks(geometry.initial_poses(seed))
-        world.set_conf(conf)
-        named = {ROBOT: world.robot, **world.fixtures, **world.blocks}
-        rgb, seg = _render(world.client, list(named.values()), width, height)
+    client = bodies.connect()
+    try:
+        named = {body.name: _build(client, body) for body in view.bodies}
+        rgb, seg = _render(client, list(named.values()), width, height, view.floor_z)
+    finally:
+        bodies.disconnect(client)
     _write_png(out, rgb)
     ids, counts = np.unique(seg, return_counts=True)
     by_id = dict(zip(ids.tolist(), counts.tolist(), strict=True))
     pixels = {name: int(by_id.get(body, 0)) for name, body in named.items()}
-    log.info(
-        "rendered %s seed %d to %s (%dx%d) in %.2f s",
-        scene.name,
-        seed,
-        out,
-        width,
-        height,
-        time.perf_counter() - start,
-    )
+    log.info("rendered to %s (%dx%d) in %.2f s", out, width, height, time.perf_counter() - start)
     info = RenderInfo(out, width, height, pixels)
     if info.hidden():
         log.warning("not visible in %s: %s", out, ", ".join(info.hidden()))
     return info
+
+
+def _build(client: int, body: Body) -> int:
+    """One pybullet body for a scene body (static, at its start pose)."""
+    pose = (body.position, body.quat)
+    shape = body.shape
+    r, g, b = body.color
+    color = (r / 255, g / 255, b / 255, 1.0)
+    if isinstance(shape, Box):
+        half = (shape.size[0] / 2, shape.size[1] / 2, shape.size[2] / 2)
+        return bodies.add_box(client, half, pose, color)
+    if isinstance(shape, Mesh):
+        if not shape.path.is_file():
+            raise ValueError(f"body {body.name}: no mesh file {shape.path}")
+        visual = p.createVisualShape(
+            p.GEOM_MESH,
+            fileName=str(shape.path),
+            meshScale=[shape.scale] * 3,
+            physicsClientId=client,
+        )
+        if visual < 0:
+            raise ValueError(f"body {body.name}: pybullet cannot read mesh {shape.path}")
+        return int(
+            p.createMultiBody(
+                baseVisualShapeIndex=visual,
+                basePosition=pose[0],
+                baseOrientation=pose[1],
+                physicsClientId=client,
+            )
+        )
+    if not shape.path.is_file():
+        raise ValueError(f"body {body.name}: no URDF file {shape.path}")
+    try:
+        uid = p.loadURDF(
+            str(shape.path),
+            basePosition=pose[0],
+            baseOrientation=pose[1],
+            useFixedBase=True,
+            physicsClientId=client,
+        )
+    except p.error as exc:
+        raise ValueError(f"body {body.name}: pybullet cannot load {shape.path}: {exc}") from exc
+    joints = bodies.joint_indices(client, uid)
+    for name, value in shape.joints.items():
+        if name in joints:
+            p.resetJointState(uid, joints[name], value, physicsClientId=client)
+    return int(uid)
 
 
 # --- camera ----------------------------------------------------------------------------------
@@ -159,7 +185,7 @@ def _vec(a: npt.NDArray[np.float64]) -> Vec3:
 
 
 def _render(
-    client: int, subjects: list[int], width: int, height: int
+    client: int, subjects: list[int], width: int, height: int, floor_z: float = 0.0
 ) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.int32]]:
     """RGB image (height x width x 3) and segmentation mask (body id per pixel, -1 for none)."""
     points = _corners(client, subjects)
@@ -170,7 +196,7 @@ def _render(
         (hi[1] - lo[1]) / 2 + FLOOR_BORDER,
         0.005,
     )
-    floor_center = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, -half[2])
+    floor_center = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, floor_z - half[2])
     floor = bodies.add_box(client, half, (floor_center, (0.0, 0.0, 0.0, 1.0)), FLOOR_COLOR)
     try:
         distance = math.dist(eye, target)

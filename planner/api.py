@@ -1,0 +1,384 @@
+"""The public Python API: plan a scene file or a :class:`~planner.pddl.Problem` with any planner.
+
+    from planner.api import plan
+
+    result = plan("examples/tabletop2d/scenes/tabletop-3.json", planner="baseline", seed=0)
+    print(result.status, result.planning_s, result.check)
+    for action in result.actions:
+        print(action)
+
+:func:`plan` takes a scene (a name, a path, or a ``Problem`` with its domain), a planner name
+(:data:`planner.planners.PLANNERS`) and its options, and returns a :class:`PlanResult`: status,
+the bound plan, its figures and its validation. Every step of the run is reported to ``sink``
+(any :class:`~planner.events.EventSink`: a list, the run store, a websocket). :func:`solve` is the
+same on a :class:`RunConfig`; ``planner/runs.py`` (recorded runs), the CLI and the dashboard's
+workers use it.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import uuid
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from planner.abstract import AbstractConfig, plan_abstract
+from planner.abstract.skeleton import AbstractPlan, GroundAction
+from planner.domains import LoadedDomain, load_domain, problem_for_scene
+from planner.domains.spec import PlanCheck
+from planner.events import (
+    AbstractPlansFound,
+    Emitter,
+    EventSink,
+    ListSink,
+    RunCancelled,
+    RunFailed,
+    RunFinished,
+    RunStarted,
+)
+from planner.pddl.structs import Problem
+from planner.planners import (
+    DEFAULT_PLANNER,
+    ORDERS,
+    PLANNERS,
+    Budget,
+    PlanningTask,
+    get_planner,
+)
+from planner.plans import plan_to_dict, validate
+from planner.search.binding import BoundPlan
+from planner.streams.runtime import QueryResult, StreamRuntime
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "DEFAULT_PLANNER",
+    "PLANNERS",
+    "PlanResult",
+    "RunConfig",
+    "RunResult",
+    "plan",
+    "solve",
+]
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """One run: what to plan, with which planner, how long. Every run is reproducible from its
+    config (and the model file, when it names one)."""
+
+    scene: str  # scene name, path to a scene file, or the problem's name (plan(problem))
+    seed: int = 0  # draws the scene's random parts and seeds the samplers
+    planner: str = DEFAULT_PLANNER  # one of planner.planners.PLANNERS
+    k: int = 50  # skeletons asked of the top-k planner (the paper's k)
+    budget_s: float = 300.0  # wall-clock budget of the run, top-k included
+    attempts: int = 10  # sequential only: queries of one stream before a restart
+    restarts: int = 3  # sequential only: restarts of one skeleton before the next
+    model: str | None = None  # model file (default: the domain's own; none: priors)
+    c_explore: float | None = None  # learned only: UCT exploration weight (default: LearnedConfig)
+    # Stream order of the tree searches: "plan" as the actions need them, "model" cheap
+    # doubtful tests first by the model (planner/search/order.py), "auto" model for learned.
+    order: str = "auto"
+    domain: str | None = None  # the domain's name or folder; None: the scene file's "domain"
+    # Learned with no model for the domain: per-stream priors from this store's queries.
+    priors_db: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.planner not in PLANNERS:
+            raise ValueError(f"unknown planner {self.planner!r} (known: {', '.join(PLANNERS)})")
+        if not 0 < self.budget_s <= 86_400:
+            raise ValueError(f"budget must be between 0 and 86400 s, got {self.budget_s}")
+        if self.c_explore is not None and not 0.0 <= self.c_explore <= 10.0:
+            raise ValueError(f"c_explore must be between 0 and 10, got {self.c_explore}")
+        if self.k < 1 or self.attempts < 1 or self.restarts < 1:
+            raise ValueError("k, attempts and restarts must be positive")
+        if self.order not in ORDERS:
+            raise ValueError(f"unknown stream order {self.order!r} (known: {', '.join(ORDERS)})")
+        if self.planner == "sequential" and self.order == "model":
+            raise ValueError("order 'model' is for the tree searches (baseline, learned)")
+
+    @property
+    def stream_order(self) -> str:
+        """The order the run uses: "plan" or "model" ("auto" resolved by the planner)."""
+        if self.order != "auto":
+            return self.order
+        return "model" if self.planner == "learned" else "plan"
+
+    @property
+    def uses_model(self) -> bool:
+        """Whether the run loads a cost model (to search with, or to order streams)."""
+        return get_planner(self.planner).uses_model or (
+            self.planner != "sequential" and self.stream_order == "model"
+        )
+
+
+@dataclass(frozen=True)
+class RunResult:
+    run_id: str
+    config: RunConfig
+    status: str  # solved, timeout, failed, cancelled
+    bound: BoundPlan | None
+    planning_s: float  # wall seconds from start (top-k included) to the bound plan or the end
+    topk_s: float
+    execution_s: float | None  # trajectory seconds of the bound plan
+    oracle_s: float | None  # top-k + successful queries on the solution branch
+    queries: list[QueryResult] = field(repr=False)
+    nodes: int = 0  # tree nodes (tree searches) or skeletons tried (sequential)
+    reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
+
+    @property
+    def solved(self) -> bool:
+        return self.bound is not None
+
+    def query_counts(self) -> Counter[tuple[str, bool]]:
+        return Counter((q.stream, q.success) for q in self.queries)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A run's result with its domain and problem; :meth:`check` validates the plan."""
+
+    result: RunResult
+    loaded: LoadedDomain
+    problem: Problem
+    runtime: StreamRuntime | None = field(default=None, repr=False)
+
+    @property
+    def status(self) -> str:
+        return self.result.status
+
+    @property
+    def solved(self) -> bool:
+        return self.result.solved
+
+    @property
+    def planning_s(self) -> float:
+        return self.result.planning_s
+
+    @property
+    def execution_s(self) -> float | None:
+        return self.result.execution_s
+
+    @property
+    def actions(self) -> tuple[GroundAction, ...]:
+        """The bound plan's actions (empty when not solved)."""
+        return () if self.result.bound is None else self.result.bound.skeleton.actions
+
+    @property
+    def values(self) -> dict[str, Any]:
+        """The values of the plan's objects (empty when not solved)."""
+        return {} if self.result.bound is None else dict(self.result.bound.values)
+
+    def check(self) -> tuple[bool | None, str]:
+        """``(valid, message)``: the domain's validator, or a fact-by-fact replay with the test
+        streams asked again (:func:`planner.plans.validate`); ``None`` without a plan."""
+        bound = self.result.bound
+        if bound is None:
+            return None, f"no plan ({self.result.status})"
+        report: PlanCheck = validate(
+            self.loaded,
+            self.problem,
+            bound.skeleton.actions,
+            bound.values,
+            streams=bound.skeleton.stream_plan,
+            runtime=self.runtime,
+        )
+        return report.ok, report.message
+
+    def plan_file(self) -> dict[str, Any] | None:
+        """The bound plan as a plan file's dict (:mod:`planner.plans`); None when not solved."""
+        bound = self.result.bound
+        if bound is None:
+            return None
+        folder = self.loaded.source.startswith("folder ")
+        return plan_to_dict(
+            loaded=self.loaded,
+            scene=self.result.config.scene,
+            seed=self.result.config.seed,
+            plan=bound.skeleton,
+            values=bound.values,
+            domain_path=str(self.loaded.directory) if folder else None,
+        )
+
+
+def plan_summaries(plans: Sequence[AbstractPlan]) -> list[dict[str, Any]]:
+    """The abstract plans as an ``abstract_plans_found`` event carries them."""
+    return [
+        {
+            "index": i,
+            "cost": p.cost,
+            "actions": [str(a) for a in p.actions],
+            "streams": [str(s) for s in p.stream_plan],
+        }
+        for i, p in enumerate(plans)
+    ]
+
+
+def plan(
+    scene: str | Path | Problem,
+    planner: str = DEFAULT_PLANNER,
+    *,
+    domain: str | Path | LoadedDomain | None = None,
+    seed: int = 0,
+    budget_s: float = 300.0,
+    model: str | Path | None = None,
+    sink: EventSink | None = None,
+    progress: Callable[[str], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+    **options: Any,
+) -> PlanResult:
+    """Plan ``scene`` (a scene name or path, or a ``Problem`` of ``domain``) with ``planner``.
+
+    ``options`` are the other :class:`RunConfig` fields (``k``, ``order``, ``c_explore``,
+    ``attempts``, ``restarts``, ``priors_db``); an unknown one raises ``TypeError``. Events go
+    to ``sink`` (a fresh :class:`~planner.events.ListSink` when None).
+    """
+    names = {f.name for f in fields(RunConfig)} - {"scene", "seed", "planner", "budget_s"}
+    unknown = sorted(set(options) - names)
+    if unknown:
+        raise TypeError(
+            f"unknown option(s) {', '.join(unknown)} (known: {', '.join(sorted(names))})"
+        )
+    loaded: LoadedDomain | None = None
+    if isinstance(domain, LoadedDomain):
+        loaded = domain
+    elif domain is not None:
+        loaded = load_domain(domain)
+    problem: Problem | None = None
+    if isinstance(scene, Problem):
+        if loaded is None:
+            raise ValueError("plan(problem) needs domain= (the problem's domain)")
+        problem = scene
+        scene_ref = scene.name
+    else:
+        scene_ref = str(scene)
+    domain_ref = None
+    if loaded is not None and loaded.source.startswith("folder "):
+        domain_ref = str(loaded.directory)
+    elif isinstance(domain, str):
+        domain_ref = domain
+    config = RunConfig(
+        scene=scene_ref,
+        seed=seed,
+        planner=planner,
+        budget_s=budget_s,
+        model=None if model is None else str(model),
+        domain=domain_ref,
+        **options,
+    )
+    return solve(
+        config,
+        problem=problem,
+        loaded=loaded,
+        sink=sink,
+        progress=progress,
+        should_stop=should_stop,
+    )
+
+
+def solve(
+    config: RunConfig,
+    *,
+    problem: Problem | None = None,
+    loaded: LoadedDomain | None = None,
+    sink: EventSink | None = None,
+    run_id: str | None = None,
+    progress: Callable[[str], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> PlanResult:
+    """Run ``config`` (on ``problem`` when given, else on its scene); every step is reported to
+    ``sink``. A run ends with ``run_finished``, ``run_cancelled`` or ``run_failed`` (then the
+    exception propagates)."""
+    run_id = run_id or uuid.uuid4().hex
+    emitter = Emitter(run_id, sink if sink is not None else ListSink())
+    start = time.perf_counter()
+    emitter.emit(
+        RunStarted,
+        scene=config.scene,
+        seed=config.seed,
+        planner=config.planner,
+        config=asdict(config),
+    )
+    try:
+        out = _solve(config, problem, loaded, run_id, emitter, start, progress, should_stop)
+    except KeyboardInterrupt:
+        emitter.emit(RunCancelled, reason="interrupted by the user")
+        raise
+    except Exception as exc:
+        emitter.emit(RunFailed, error=f"{type(exc).__name__}: {exc}")
+        raise
+    result = out.result
+    if result.status == "cancelled":
+        emitter.emit(RunCancelled, reason="cancelled by the user")
+        return out
+    emitter.emit(
+        RunFinished,
+        status=result.status,
+        planning_s=result.planning_s,
+        execution_s=result.execution_s,
+        oracle_s=result.oracle_s,
+        queries=len(result.queries),
+        message="solved" if result.solved else f"no plan ({result.status})",
+    )
+    return out
+
+
+def _solve(
+    config: RunConfig,
+    problem: Problem | None,
+    loaded: LoadedDomain | None,
+    run_id: str,
+    emitter: Emitter,
+    start: float,
+    progress: Callable[[str], None] | None,
+    should_stop: Callable[[], bool] | None,
+) -> PlanResult:
+    if problem is None:
+        loaded, problem = problem_for_scene(
+            config.scene, seed=config.seed, domain=loaded if loaded is not None else config.domain
+        )
+    elif loaded is None:
+        raise ValueError("a problem needs its domain")
+    abstract = plan_abstract(
+        loaded.domain,
+        loaded.streams,
+        problem,
+        AbstractConfig(k=config.k, diversity_ignore=loaded.spec.diversity_ignore),
+        progress=progress or (lambda _m: None),
+    )
+    initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
+    initial.update(problem.values)
+    planner = get_planner(config.planner)(config)
+    task = PlanningTask(
+        loaded,
+        problem,
+        abstract.plans,
+        initial,
+        topk_s=abstract.seconds["topk"],
+        static_context=loaded.static_context(problem),
+    )
+    task = planner.prepare(task)
+    emitter.emit(
+        AbstractPlansFound, plans=plan_summaries(task.plans), seconds=abstract.seconds["total"]
+    )
+    task.runtime = loaded.runtime(problem, seed=config.seed)
+    budget = Budget(start, start + config.budget_s, progress, should_stop)
+    outcome = planner.solve(task, emitter, budget)
+    result = RunResult(
+        run_id,
+        config,
+        outcome.status,
+        outcome.bound,
+        time.perf_counter() - start,
+        task.topk_s,
+        outcome.execution_s,
+        outcome.oracle_s,
+        outcome.queries,
+        outcome.nodes,
+        outcome.reused,
+    )
+    return PlanResult(result, loaded, problem, task.runtime)

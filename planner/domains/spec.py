@@ -1,0 +1,143 @@
+"""The public domain interface: :class:`DomainSpec` (what a domain's module exports) and
+:class:`LoadedDomain` (a spec with its parsed PDDL, as every generic layer uses it).
+
+docs/domains.md walks through writing one; ``examples/tabletop2d/`` is a complete example.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from planner.abstract.skeleton import GroundAction
+from planner.pddl.parser import load_problem
+from planner.pddl.structs import Domain, Problem, StreamSet
+from planner.scene import Scene
+from planner.streams.adapters import StreamAdapter
+from planner.streams.runtime import StreamRuntime, bind_streams
+from planner.values import JSON, ValueCodec, ValueType
+
+if TYPE_CHECKING:
+    from planner.learning.features import StateFeatures
+    from planner.view import DomainView
+
+ProblemBuilder = Callable[[Scene, Domain, int], Problem]  # scene, parsed domain, seed
+BindingFactory = Callable[[Problem, random.Random], Mapping[str, StreamAdapter]]
+StaticContext = Callable[[Problem], Mapping[str, Any]]  # JSON facts of the scene, per problem
+
+
+@dataclass(frozen=True)
+class PlanCheck:
+    """What a plan validator says of a bound plan."""
+
+    ok: bool
+    message: str  # "valid ..." or where and why it fails
+    execution_s: float | None = None  # seconds to execute the plan, when the validator knows
+
+
+# The bound plan's actions, the values of its objects (optimistic ones bound), the problem.
+PlanValidator = Callable[[Sequence[GroundAction], Mapping[str, Any], Problem], PlanCheck]
+
+
+@dataclass(frozen=True)
+class DomainSpec:
+    """One domain, as its module exports it (``DOMAIN = DomainSpec(...)``).
+
+    The folder holding the module also holds ``domain.pddl`` and ``stream.pddl`` (and usually a
+    ``scenes/`` folder of scene files). Only ``name``, ``problem_from_scene`` and ``bindings``
+    are required; every hook has a default (see each field).
+    """
+
+    name: str  # what scene files and models call the domain
+    problem_from_scene: ProblemBuilder  # objects, init, goal and values from a scene file
+    bindings: BindingFactory | None  # stream name -> sampler; None: no samplers yet
+    # Kinds of values the samplers produce, each with a JSON codec and a feature encoder.
+    # Strings, numbers and number sequences need none (built in).
+    value_types: tuple[ValueType, ...] = ()
+    validate: PlanValidator | None = None  # None: the plan is replayed symbolically
+    # What every query's context carries besides its state (JSON, e.g. the sizes of the
+    # scene's tables); recorded with each query and given to the learned models.
+    static_context: StaticContext | None = None
+    view: DomainView | None = None  # the 3D view's hook; None: "no 3D view for this domain"
+    # Feature encoding of the state where a stream's output is needed, for the learned models.
+    # None: the generic encoding of the fluent facts and their values (planner/learning).
+    features: StateFeatures | None = None
+    # Per stream, the value kind of each input (e.g. ("name", "pose")); None: learned from the
+    # recorded queries when a model is fit. Needed only for streams that may go unrecorded.
+    input_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    model: Path | None = None  # a model file shipped with the domain (learned's default)
+    description: str = ""  # one line for listings
+    # Search hints (docs/search.md): actions that only reorder (see AbstractConfig) ...
+    diversity_ignore: tuple[str, ...] = ()
+    # ... fluents that do not change a stream's outcome (pooled evidence ignores them) ...
+    evidence_ignore: tuple[str, ...] = ()
+    # ... and per stream, fluents of its context its sampler never reads (the model's stream
+    # order, planner/search/order.py, need not bind the objects they name first).
+    unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    directory: Path | None = None  # where its PDDL files are; None: the module's folder
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name.replace("-", "_").isidentifier():
+            raise ValueError(f"domain name {self.name!r}: letters, digits, '-' and '_' only")
+        if not callable(self.problem_from_scene):
+            raise ValueError(f"domain {self.name!r}: problem_from_scene must be a function")
+        if self.bindings is not None and not callable(self.bindings):
+            raise ValueError(f"domain {self.name!r}: bindings must be a function or None")
+
+
+@dataclass(frozen=True)
+class LoadedDomain:
+    """A domain ready to use: its spec, parsed PDDL, where it came from and its value codec."""
+
+    spec: DomainSpec
+    domain: Domain
+    streams: StreamSet
+    directory: Path  # the folder of domain.pddl and stream.pddl
+    source: str  # how it was found: "folder PATH" or "entry point NAME = MODULE:ATTR"
+    codec: ValueCodec = field(repr=False)
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def scenes_dir(self) -> Path:
+        """Where the domain keeps its scene files (may not exist)."""
+        return self.directory / "scenes"
+
+    def problem_from_scene(self, scene: Scene, *, seed: int = 0) -> Problem:
+        """The scene's problem; ``seed`` draws its randomised parts."""
+        return self.spec.problem_from_scene(scene, self.domain, seed)
+
+    def problem_from_file(self, path: str | Path) -> Problem:
+        return load_problem(path, self.domain)
+
+    def static_context(self, problem: Problem) -> dict[str, Any]:
+        """The scene facts every query's context carries (empty for most domains)."""
+        if self.spec.static_context is None:
+            return {}
+        return dict(self.spec.static_context(problem))
+
+    def runtime(self, problem: Problem, *, seed: int) -> StreamRuntime:
+        """Samplers bound to the declared streams, seeded."""
+        if self.spec.bindings is None:
+            raise NotImplementedError(f"domain {self.name!r} has no stream samplers yet")
+        return bind_streams(self.streams, self.spec.bindings(problem, random.Random(seed)))
+
+    def encode(self, value: Any) -> JSON:
+        """A value as JSON, by the domain's value types."""
+        return self.codec.encode(value)
+
+    def decode(self, data: JSON, where: str) -> Any:
+        """The value of ``data``; ValueDecodeError names ``where`` and what is wrong."""
+        return self.codec.decode(data, where)
+
+    @property
+    def fluents(self) -> frozenset[str]:
+        """The predicates some action adds or deletes."""
+        return frozenset(
+            a.predicate for act in self.domain.actions for a in act.add_effects + act.del_effects
+        )

@@ -1,0 +1,427 @@
+"""Planners by name: each binds the abstract plans of a task to real values, reporting through
+events. One registry (:data:`PLANNERS`, :func:`get_planner`), as the top-k backends have.
+
+- ``baseline``: eTAMP's progressive-widening tree search (Ren et al.);
+- ``learned``: the tree search guided by per-stream models of success and cost (Bradley & Roy):
+  the domain's trained model, or, without one, per-stream priors (success rates and mean costs
+  of recorded queries, or uniform figures), which it says in one warning line;
+- ``sequential``: binds each skeleton's streams in order, with retries and restarts (the
+  simplest thing that works, kept as a reference).
+
+A planner gets a :class:`PlanningTask` (the problem, its abstract plans, the stream runtime) and
+returns a :class:`PlannerOutcome`; :func:`planner.api.solve` does the rest (top-k, events, the
+result).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from planner.abstract.instantiate import StreamInstance
+from planner.abstract.skeleton import AbstractPlan
+from planner.domains.spec import LoadedDomain
+from planner.events import Emitter, ModelPrediction, NodeAdded, SolutionFound, StreamQueried
+from planner.pddl.structs import Atom, Problem
+from planner.search.baseline import BaselineConfig
+from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
+from planner.search.learned import LearnedConfig, LearnedPolicy, Predictor, StreamCost, stream_rows
+from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
+from planner.search.order import order_streams, seconds_per_failure
+from planner.search.tree import Node
+from planner.streams.adapters import StreamContext
+from planner.streams.runtime import QueryResult, StreamRuntime
+
+if TYPE_CHECKING:
+    from planner.api import RunConfig
+
+log = logging.getLogger(__name__)
+
+ORDERS = ("auto", "plan", "model")  # how a tree search orders each stream plan's streams
+
+
+@dataclass
+class PlanningTask:
+    """What a planner binds: the problem, its abstract plans (and the symbolic state at each of
+    their streams), the values of the problem's objects and the seeded samplers."""
+
+    loaded: LoadedDomain
+    problem: Problem
+    plans: tuple[AbstractPlan, ...]
+    initial: dict[str, Any]  # object name -> value (a name stands for itself)
+    topk_s: float  # seconds the top-k planner took
+    static_context: dict[str, Any] = field(default_factory=dict)
+    states: list[list[frozenset[Atom]]] = field(default_factory=list)
+    runtime: StreamRuntime | None = None  # set once the plans are reported, before solve()
+
+    @property
+    def fluents(self) -> frozenset[str]:
+        return self.loaded.fluents
+
+    @property
+    def samplers(self) -> StreamRuntime:
+        if self.runtime is None:
+            raise RuntimeError("the task's stream runtime is not bound yet")
+        return self.runtime
+
+
+@dataclass(frozen=True)
+class PlannerOutcome:
+    """How a planner ended, and what it made."""
+
+    status: str  # solved, timeout, failed, cancelled
+    bound: BoundPlan | None
+    execution_s: float | None  # trajectory seconds of the bound plan
+    oracle_s: float | None  # top-k + successful queries on the solution branch
+    queries: list[QueryResult]  # queries a sampler answered, in order
+    nodes: int  # tree nodes (tree searches) or skeletons tried (sequential)
+    reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
+
+
+@dataclass(frozen=True)
+class Budget:
+    """When to stop: the run's start and deadline (perf_counter seconds) and who may stop it."""
+
+    start: float
+    deadline: float
+    progress: Callable[[str], None] | None = None
+    should_stop: Callable[[], bool] | None = None
+
+
+class Planner(ABC):
+    """A planner: :meth:`prepare` may reorder the task's stream plans before they are reported,
+    :meth:`solve` binds them."""
+
+    name: ClassVar[str]
+    uses_model: ClassVar[bool] = False  # loads a cost model (to search with or to order by)
+
+    def __init__(self, config: RunConfig) -> None:
+        self.config = config
+
+    def prepare(self, task: PlanningTask) -> PlanningTask:
+        return task
+
+    @abstractmethod
+    def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome: ...
+
+
+# --- models ------------------------------------------------------------------------------------
+
+
+def load_predictor(config: RunConfig, loaded: LoadedDomain) -> Predictor:
+    """The cost model of a run: ``config.model``, else the domain's shipped model, else per-stream
+    priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning."""
+    path = config.model or loaded.spec.model
+    if path is not None:
+        from planner.learning.predictor import ModelPredictor
+
+        return ModelPredictor.load(Path(path), domain=loaded)
+    from planner.learning.priors import PriorPredictor, priors_from_records
+
+    priors = {}
+    source = "no recorded queries: uniform priors"
+    if config.priors_db is not None and Path(config.priors_db).is_file():
+        from planner.learning.train import load_records
+
+        records = load_records([Path(config.priors_db)], domain=loaded.name)
+        priors = priors_from_records(records)
+        if records:
+            source = f"priors from {len(records)} queries recorded in {config.priors_db}"
+    log.warning(
+        "no model for domain %r: the learned search runs on per-stream priors (%s); "
+        "tamp train makes a model from recorded runs",
+        loaded.name,
+        source,
+    )
+    return PriorPredictor(priors)
+
+
+def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
+    """Every stream plan reordered by the model's predictions before anything is bound
+    (:mod:`planner.search.order`), in one batch."""
+    spans: list[tuple[int, int]] = []
+    rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
+    for plan, plan_states in zip(task.plans, task.states, strict=True):
+        mine = stream_rows(
+            plan,
+            plan_states,
+            task.initial,
+            encode=task.loaded.encode,
+            fluents=task.fluents,
+            static_context=task.static_context,
+        )
+        spans.append((len(rows), len(rows) + len(mine)))
+        rows += mine
+    costs = predictor.predict_rows(rows) if rows else []
+    out_plans: list[AbstractPlan] = []
+    out_states: list[list[frozenset[Atom]]] = []
+    unread: Mapping[str, Collection[str]] = task.loaded.spec.unread
+    for plan, plan_states, (lo, hi) in zip(task.plans, task.states, spans, strict=True):
+        scores = [seconds_per_failure(c) for c in costs[lo:hi]]
+        ordered, ordered_states = order_streams(plan, plan_states, task.fluents, scores, unread)
+        out_plans.append(ordered)
+        out_states.append(ordered_states)
+    task.plans, task.states = tuple(out_plans), out_states
+    return task
+
+
+# --- the tree searches -------------------------------------------------------------------------
+
+
+class _TreeSearchPlanner(Planner):
+    """A tree search over stream bindings; subclasses give the policy."""
+
+    default_order: ClassVar[str] = "plan"
+
+    def __init__(self, config: RunConfig) -> None:
+        super().__init__(config)
+        self.predictor: Predictor | None = None
+
+    @property
+    def order(self) -> str:
+        return self.default_order if self.config.order == "auto" else self.config.order
+
+    def prepare(self, task: PlanningTask) -> PlanningTask:
+        task.states = [stream_contexts(p, task.loaded.domain, task.problem) for p in task.plans]
+        if self.uses_model or self.order == "model":
+            self.predictor = load_predictor(self.config, task.loaded)
+        if self.predictor is not None and self.order == "model":
+            task = model_order(task, self.predictor)
+        return task
+
+    def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
+        return BaselinePolicy(BaselineConfig())
+
+    def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome:
+        search = TreeSearch(
+            task.plans,
+            task.states,
+            task.initial,
+            task.samplers,
+            self.policy(task, emitter),
+            emitter=emitter,
+            encode=task.loaded.encode,
+            describe=task.loaded.codec.label,
+            progress=budget.progress or (lambda _m: None),
+            should_stop=budget.should_stop,
+            fluents=task.fluents,
+            static_context=task.static_context,
+            reuse=True,
+        )
+        outcome = search.run(deadline=budget.deadline, start=budget.start)
+        queries = [r for _, r in outcome.queries if not r.reused]
+        reused = sum(1 for _, r in outcome.queries if r.reused)
+        bound = None
+        execution_s = oracle_s = None
+        if outcome.solved and outcome.plan_index is not None:
+            skeleton = task.plans[outcome.plan_index]
+            bound = BoundPlan(skeleton, {**task.initial, **outcome.values})
+            branch = set(search.tree.path(outcome.node_id or 0))
+            execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
+            oracle_s = task.topk_s + outcome.oracle_query_s
+        return PlannerOutcome(
+            outcome.status, bound, execution_s, oracle_s, queries, len(search.tree), reused
+        )
+
+
+class BaselinePlanner(_TreeSearchPlanner):
+    name = "baseline"
+
+
+class LearnedPlanner(_TreeSearchPlanner):
+    name = "learned"
+    uses_model = True
+    default_order = "model"
+
+    def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
+        assert self.predictor is not None  # prepare() loaded it
+
+        def report(node: Node, first: StreamCost, q: float) -> None:
+            emitter.emit(
+                ModelPrediction,
+                node_id=node.id,
+                p_s=first.p_s,
+                r_s=first.r_s,
+                r_f=first.r_f,
+                r_m=first.r_m,
+                q=q,
+            )
+
+        c = self.config.c_explore
+        return LearnedPolicy(
+            self.predictor,
+            task.plans,
+            task.states,
+            task.initial,
+            task.loaded.encode,
+            task.fluents,
+            LearnedConfig() if c is None else LearnedConfig(c),
+            on_prediction=report,
+            evidence_ignore=frozenset(task.loaded.spec.evidence_ignore),
+            static_context=task.static_context,
+        )
+
+
+# --- the sequential binder ---------------------------------------------------------------------
+
+
+class SequentialPlanner(Planner):
+    name = "sequential"
+
+    def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome:
+        recorder = _SequentialRecorder(emitter, task, budget.start)
+        queries: list[QueryResult] = []
+        bound: BoundPlan | None = None
+        tried = 0
+        for index, plan in enumerate(task.plans):
+            if time.perf_counter() > budget.deadline:
+                break
+            if budget.should_stop is not None and budget.should_stop():
+                return PlannerOutcome("cancelled", None, None, None, queries, tried)
+            tried += 1
+            recorder.open_plan(index)
+            bound, made = bind_sequentially(
+                plan,
+                task.loaded.domain,
+                task.problem,
+                task.samplers,
+                attempts=self.config.attempts,
+                restarts=self.config.restarts,
+                observe=recorder.queried,
+            )
+            queries += made
+            if bound is not None:
+                break
+        execution_s = oracle_s = None
+        if bound is not None:
+            execution_s = sum(float(getattr(v, "seconds", 0.0)) for v in _trajectories(bound))
+            oracle_s = recorder.solved(execution_s)
+        status = "solved" if bound is not None else "timeout"
+        return PlannerOutcome(status, bound, execution_s, oracle_s, queries, tried)
+
+
+class _SequentialRecorder:
+    """Reports a sequential run as a tree, as the tree searches do: a node per skeleton tried
+    under the root, under it each query's node, a success the parent of the next query (a
+    restart starts again from the skeleton's node). So the dashboard shows the run and the
+    store keeps every query as a training row."""
+
+    def __init__(self, emitter: Emitter, task: PlanningTask, start: float) -> None:
+        self.emitter = emitter
+        self.plans: Sequence[AbstractPlan] = task.plans
+        self.fluents = task.fluents
+        self.static_context = task.static_context
+        self.encode = task.loaded.encode
+        self.describe = task.loaded.codec.label
+        self.start = start
+        self.topk_s = task.topk_s
+        self.next_id = 1  # 0 is the root
+        self.plan_index = -1
+        self.plan_node = 0
+        self.restart = -1
+        self.parent = 0
+        self.chain: list[tuple[int, float]] = []  # (node, wall seconds) of this restart's successes
+
+    def _add(self, parent: int, depth: int, stream: str | None, success: bool, **kw: Any) -> int:
+        node = self.next_id
+        self.next_id += 1
+        self.emitter.emit(
+            NodeAdded,
+            node_id=node,
+            parent_id=parent,
+            plan_index=self.plan_index,
+            depth=depth,
+            stream=stream,
+            success=success,
+            **kw,
+        )
+        return node
+
+    def open_plan(self, index: int) -> None:
+        self.plan_index, self.restart, self.chain = index, -1, []
+        plan = self.plans[index]
+        label = f"plan {index} ({len(plan.stream_plan)} streams)"
+        self.plan_node = self._add(0, 0, None, True, outputs=[], label=label)
+
+    def queried(
+        self,
+        restart: int,
+        i: int,
+        inst: StreamInstance,
+        inputs: tuple[Any, ...],
+        context: StreamContext,
+        result: QueryResult,
+    ) -> None:
+        if restart != self.restart:
+            self.restart, self.parent, self.chain = restart, self.plan_node, []
+        node = self.next_id
+        encoded = [self.encode(v) for v in inputs]
+        self.emitter.emit(
+            StreamQueried,
+            node_id=node,
+            stream=inst.stream,
+            input_names=list(inst.inputs),
+            inputs=encoded,
+            input_labels=[self.describe(v) for v in encoded],
+            success=result.success,
+            wall_s=result.wall_s,
+            cpu_s=result.cpu_s,
+            execution_s=result.execution_s,
+            error=result.error,
+            context=context_json(context, self.fluents, self.static_context, self.encode),
+            reason=result.reason,
+        )
+        outputs = [self.encode(v) for v in result.outputs or ()]
+        label = f"{inst}" + ("" if result.success else " (failed)")
+        self._add(
+            self.parent,
+            i + 1,
+            inst.stream,
+            result.success,
+            outputs=outputs,
+            label=label,
+            output_names=list(inst.outputs) if result.success else [],
+            output_labels=[self.describe(v) for v in outputs],
+        )
+        if result.success:
+            self.parent = node
+            self.chain.append((node, result.wall_s))
+
+    def solved(self, execution_s: float) -> float:
+        """Reports the solution (the last success); returns its oracle seconds."""
+        oracle = self.topk_s + sum(wall for _, wall in self.chain)
+        self.emitter.emit(
+            SolutionFound,
+            node_id=self.parent,
+            plan_index=self.plan_index,
+            planning_s=time.perf_counter() - self.start,
+            execution_s=execution_s,
+            oracle_s=oracle,
+        )
+        return oracle
+
+
+def _trajectories(bound: BoundPlan) -> list[Any]:
+    used = {a for act in bound.skeleton.actions for a in act.args}
+    return [v for k, v in bound.values.items() if k in used and hasattr(v, "segments")]
+
+
+# --- the registry ------------------------------------------------------------------------------
+
+PLANNERS: dict[str, type[Planner]] = {
+    p.name: p for p in (BaselinePlanner, LearnedPlanner, SequentialPlanner)
+}
+DEFAULT_PLANNER = "baseline"
+
+
+def get_planner(name: str) -> type[Planner]:
+    """The planner called ``name``; an unknown name lists the known ones."""
+    try:
+        return PLANNERS[name]
+    except KeyError:
+        raise ValueError(f"unknown planner {name!r} (known: {', '.join(PLANNERS)})") from None

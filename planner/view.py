@@ -1,0 +1,264 @@
+"""What a domain tells the 3D view: the bodies of a scene, how sampled values are drawn, and how a
+bound plan moves the bodies. Plain data, no viser (only ``app/`` touches viser).
+
+A domain's :class:`DomainView` (its ``view`` hook) gives:
+
+- :meth:`DomainView.scene`: the scene's bodies (:class:`Body`: a box, a mesh file or a URDF, with
+  a pose, a colour and an optional label) and optionally where the camera starts;
+- :meth:`DomainView.markers`: how a sampled value is drawn as a ghost where it lies
+  (:class:`Marker`: boxes, a compound of boxes, an arrow on the floor, a path), in named layers
+  the view counts and batches ("placements", "grasps", ...);
+- :meth:`DomainView.failure_at`: where a failed query was about (a red diamond is drawn there);
+- :meth:`DomainView.animate`: a bound plan as a :class:`Timeline` of body states, which the
+  view plays in real time.
+
+Units are metres and radians; quaternions are ``xyzw`` (pybullet's order; ``app/`` converts).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal, Protocol
+
+from planner.abstract.skeleton import GroundAction
+from planner.pddl.structs import Problem
+
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]  # x, y, z, w
+Rgb = tuple[int, int, int]  # 0-255
+IDENTITY: Quat = (0.0, 0.0, 0.0, 1.0)
+GREY: Rgb = (150, 150, 150)
+
+
+def yaw_quat(yaw: float) -> Quat:
+    """The rotation by ``yaw`` about +z."""
+    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+
+
+def _finite(values: Sequence[float], what: str) -> None:
+    if not all(isinstance(v, int | float) and math.isfinite(v) for v in values):
+        raise ValueError(f"{what} must be finite numbers, got {tuple(values)}")
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned box centred on its body's pose."""
+
+    size: Vec3
+
+    def __post_init__(self) -> None:
+        _finite(self.size, "box size")
+        if min(self.size) <= 0:
+            raise ValueError(f"box sizes must be positive, got {self.size}")
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A mesh file (anything trimesh reads: .obj, .stl, .glb, ...), scaled."""
+
+    path: Path
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class Urdf:
+    """A robot or articulated object from a URDF file, with its joints' start values (a joint
+    not named stays at 0)."""
+
+    path: Path
+    joints: Mapping[str, float] = field(default_factory=dict)
+
+
+Shape = Box | Mesh | Urdf
+
+
+@dataclass(frozen=True)
+class Body:
+    """One body of the scene at its start pose."""
+
+    name: str
+    shape: Shape
+    position: Vec3 = (0.0, 0.0, 0.0)
+    quat: Quat = IDENTITY
+    color: Rgb = GREY  # boxes; meshes and URDFs keep their own colours
+    label: str | None = None  # drawn above the body
+    opacity: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.name or "/" in self.name:
+            raise ValueError(f"a body's name must be non-empty without '/', got {self.name!r}")
+        _finite(self.position, f"body {self.name}: position")
+        _finite(self.quat, f"body {self.name}: quat")
+
+
+@dataclass(frozen=True)
+class SceneView:
+    """Everything the view draws before the search starts."""
+
+    bodies: tuple[Body, ...]
+    camera: tuple[Vec3, Vec3] | None = None  # (position, look at); None: fitted to the bodies
+    floor_z: float = 0.0  # height of the ground plane
+
+    def __post_init__(self) -> None:
+        names = [b.name for b in self.bodies]
+        if len(set(names)) != len(names):
+            raise ValueError(f"two bodies share a name: {sorted(names)}")
+
+    def body(self, name: str) -> Body:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(f"no body {name!r}")
+
+
+MarkerKind = Literal["box", "boxes", "arrow", "path"]
+
+
+@dataclass(frozen=True)
+class Marker:
+    """How one sampled value is drawn: in ``layer`` (one batch, one count), a ``box`` of
+    ``size``, a compound of ``parts`` (``(centre, size)`` boxes in the marker's frame, e.g. a
+    gripper), an ``arrow`` on the floor along the marker's x axis, or a ``path`` through
+    ``points``. Every marker of one layer must be of one kind (and, for ``boxes``, one set of
+    parts)."""
+
+    layer: str
+    kind: MarkerKind
+    position: Vec3 = (0.0, 0.0, 0.0)
+    quat: Quat = IDENTITY
+    size: Vec3 = (0.05, 0.05, 0.05)
+    parts: tuple[tuple[Vec3, Vec3], ...] = ()
+    points: tuple[Vec3, ...] = ()
+    translucent: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.layer or "/" in self.layer:
+            raise ValueError(f"a marker layer must be non-empty without '/', got {self.layer!r}")
+        _finite(self.position, "marker position")
+        _finite(self.quat, "marker quat")
+        if self.kind == "path" and not self.points:
+            raise ValueError("a path marker needs points")
+        if self.kind == "boxes" and not self.parts:
+            raise ValueError("a boxes marker needs parts")
+
+
+@dataclass(frozen=True)
+class QueryView:
+    """A query as the view reads it from its events: the stream, its input values (decoded
+    with the domain's value types) and, for a success, its outputs."""
+
+    stream: str
+    inputs: tuple[Any, ...]
+    outputs: tuple[Any, ...] = ()
+
+
+@dataclass(frozen=True)
+class BodyState:
+    """Where a body is at one moment of a plan. ``attached`` puts it relative to a link of
+    another body instead: ``(body, link, position, quat)``, e.g. a block in a gripper."""
+
+    position: Vec3 = (0.0, 0.0, 0.0)
+    quat: Quat = IDENTITY
+    joints: Mapping[str, float] | None = None  # URDF bodies
+    visible: bool = True
+    attached: tuple[str, str, Vec3, Quat] | None = None
+
+
+class Timeline(Protocol):
+    """A bound plan in time: the state of every body that moves, at any second."""
+
+    @property
+    def duration(self) -> float: ...
+
+    def at(self, t: float) -> Mapping[str, BodyState]:
+        """Body name -> state ``t`` seconds into the plan (bodies not named keep their start
+        pose)."""
+        ...
+
+
+@dataclass(frozen=True)
+class Keyframes:
+    """A :class:`Timeline` from keyframes: each body moves in a straight line (and turns by
+    the shortest rotation) between its states at consecutive keyframe times; joints are
+    interpolated; ``visible`` and ``attached`` switch at the keyframe."""
+
+    times: tuple[float, ...]
+    states: tuple[Mapping[str, BodyState], ...]
+
+    def __post_init__(self) -> None:
+        if len(self.times) != len(self.states) or not self.times:
+            raise ValueError("keyframes need as many states as times, and at least one")
+        if any(b < a for a, b in zip(self.times, self.times[1:], strict=False)):
+            raise ValueError("keyframe times must not decrease")
+
+    @property
+    def duration(self) -> float:
+        return self.times[-1]
+
+    def at(self, t: float) -> Mapping[str, BodyState]:
+        import bisect
+
+        if t <= self.times[0]:
+            return self.states[0]
+        if t >= self.times[-1]:
+            return self.states[-1]
+        j = bisect.bisect_right(self.times, t) - 1
+        t0, t1 = self.times[j], self.times[j + 1]
+        f = 0.0 if t1 <= t0 else (t - t0) / (t1 - t0)
+        a, b = self.states[j], self.states[j + 1]
+        out: dict[str, BodyState] = {}
+        for name, sa in a.items():
+            sb = b.get(name)
+            if sb is None or sa.attached != sb.attached or sa.visible != sb.visible:
+                out[name] = sa
+                continue
+            joints = sa.joints
+            if sa.joints is not None and sb.joints is not None:
+                joints = {k: v + f * (sb.joints.get(k, v) - v) for k, v in sa.joints.items()}
+            position = (
+                sa.position[0] + f * (sb.position[0] - sa.position[0]),
+                sa.position[1] + f * (sb.position[1] - sa.position[1]),
+                sa.position[2] + f * (sb.position[2] - sa.position[2]),
+            )
+            out[name] = BodyState(position, _slerp(sa.quat, sb.quat, f), joints, sa.visible)
+        return out
+
+
+def _slerp(a: Quat, b: Quat, f: float) -> Quat:
+    dot = sum(x * y for x, y in zip(a, b, strict=True))
+    if dot < 0:
+        b, dot = (-b[0], -b[1], -b[2], -b[3]), -dot
+    if dot > 0.9995:
+        q = tuple(x + f * (y - x) for x, y in zip(a, b, strict=True))
+    else:
+        theta = math.acos(min(1.0, dot))
+        s = math.sin(theta)
+        wa, wb = math.sin((1 - f) * theta) / s, math.sin(f * theta) / s
+        q = tuple(wa * x + wb * y for x, y in zip(a, b, strict=True))
+    n = math.sqrt(sum(x * x for x in q)) or 1.0
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+class DomainView(Protocol):
+    """A domain's 3D view hook (see the module docstring). Every method may raise for bad data
+    (ValueError, KeyError, TypeError): the view logs it and draws what it can."""
+
+    def scene(self, problem: Problem) -> SceneView: ...
+
+    def markers(self, query: QueryView, problem: Problem) -> Sequence[Marker]:
+        """Ghosts of a successful query's outputs (empty: nothing to draw)."""
+        ...
+
+    def failure_at(self, query: QueryView, problem: Problem) -> Vec3 | None:
+        """Where a failed query was about (None: not drawn)."""
+        ...
+
+    def animate(
+        self, actions: Sequence[GroundAction], values: Mapping[str, Any], problem: Problem
+    ) -> Timeline | None:
+        """The bound plan (actions over objects, objects' decoded values) in time; None when
+        the domain has nothing to play."""
+        ...
