@@ -31,7 +31,8 @@ SETTINGS = ("unread", "all")  # "all": the order waits for every fluent's object
 def _trial(job: tuple[str, int, str, float, str]) -> dict[str, Any]:
     scene, seed, setting, budget, base_order = job
     import planner.domains.kitchen.samplers as ks
-    import planner.runs as runs
+    from planner.api import RunConfig, solve
+    from planner.domains import load_domain
 
     config = replace(ks.SamplerConfig(), base_order=base_order)
     init = ks.KitchenSamplers.__init__
@@ -42,17 +43,12 @@ def _trial(job: tuple[str, int, str, float, str]) -> dict[str, Any]:
 
     ks.KitchenSamplers.__init__ = with_order  # type: ignore[method-assign]
 
-    original = runs._model_order
-    if setting == "all":
-
-        def without_unread(*args: Any, **kwargs: Any) -> Any:
-            args = (*args[:6], {}, *args[7:])
-            return original(*args, **kwargs)
-
-        runs._model_order = without_unread  # type: ignore[assignment]
-    result, _, _ = runs.run(
-        runs.RunConfig(scene=scene, seed=seed, planner="learned", budget_s=budget)
-    )
+    kitchen = load_domain("kitchen")
+    if setting == "all":  # the kitchen with no unread hint: the order waits for every fluent
+        kitchen = replace(kitchen, spec=replace(kitchen.spec, unread={}))
+    result = solve(
+        RunConfig(scene=scene, seed=seed, planner="learned", budget_s=budget), loaded=kitchen
+    ).result
     return {
         "seed": seed,
         "setting": setting,
