@@ -248,7 +248,7 @@ function syncForm() {
           return `<option value="${name}">${name}${m.default ? " (default)" : ""}${kb}</option>`;
         })
         .join("")
-    : `<option value="">no model for this scene's domain</option>`;
+    : `<option value="">none for this domain: per-stream priors</option>`;
   const keep = models.find((m) => m.name === chosen) ?? models.find((m) => m.default);
   if (keep) el.model.value = keep.name;
 }
