@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from planner.store import RunRecord
 
-PlannerName = Literal["baseline", "learned", "sequential"]
+PlannerName = Literal["baseline", "paper", "learned", "sequential"]
 StatusName = Literal["queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted"]
 
 

@@ -13,6 +13,7 @@ from app.manager import RunManager
 from app.settings import Settings
 from app.viewing import Viewer, ViewerService
 from planner.events import event_to_dict
+from planner.planners import get_planner
 from planner.runs import RunConfig
 from planner.store import LIVE_STATUSES, RunRecord, RunStore
 
@@ -67,10 +68,11 @@ class Dashboard:
             raise RequestError("scene", str(exc)) from exc
         model_path: Path | None = None
         name = model
-        if planner == "learned":
+        learned = get_planner(planner).uses_model
+        if learned:
             name = model or self.models.default_for(scene_info.domain)
         elif model is not None:
-            raise RequestError("model", "a model is only used by the learned planner")
+            raise RequestError("model", "a model is only used by the learned planners")
         if name is not None:
             try:
                 model_path = self.models.path(name)
@@ -94,7 +96,7 @@ class Dashboard:
             model=str(model_path) if model_path is not None else None,
             domain=scene_info.domain_ref,
             # Learned with no model for the domain: priors from the runs stored here.
-            priors_db=str(db) if planner == "learned" and model_path is None else None,
+            priors_db=str(db) if learned and model_path is None else None,
         )
         data = asdict(config)
         if model_path is not None:

@@ -73,7 +73,7 @@ class RunConfig:
 
     scene: str  # scene name, path to a scene file, or the problem's name (plan(problem))
     seed: int = 0  # draws the scene's random parts and seeds the samplers
-    planner: str = DEFAULT_PLANNER  # one of planner.planners.PLANNERS
+    planner: str = DEFAULT_PLANNER  # a named planner or a variant (planner.planners.get_planner)
     k: int = 50  # skeletons asked of the top-k planner (the paper's k)
     budget_s: float = 300.0  # wall-clock budget of the run, top-k included
     attempts: int = 10  # sequential only: queries of one stream before a restart
@@ -88,8 +88,7 @@ class RunConfig:
     priors_db: str | None = None
 
     def __post_init__(self) -> None:
-        if self.planner not in PLANNERS:
-            raise ValueError(f"unknown planner {self.planner!r} (known: {', '.join(PLANNERS)})")
+        spec = get_planner(self.planner)  # ValueError names what is unknown
         if not 0 < self.budget_s <= 86_400:
             raise ValueError(f"budget must be between 0 and 86400 s, got {self.budget_s}")
         if self.c_explore is not None and not 0.0 <= self.c_explore <= 10.0:
@@ -98,22 +97,21 @@ class RunConfig:
             raise ValueError("k, attempts and restarts must be positive")
         if self.order not in ORDERS:
             raise ValueError(f"unknown stream order {self.order!r} (known: {', '.join(ORDERS)})")
-        if self.planner == "sequential" and self.order == "model":
-            raise ValueError("order 'model' is for the tree searches (baseline, learned)")
+        if spec.name.startswith("sequential") and self.order == "model":
+            raise ValueError("order 'model' is for the tree searches (baseline, paper, learned)")
 
     @property
     def stream_order(self) -> str:
         """The order the run uses: "plan" or "model" ("auto" resolved by the planner)."""
         if self.order != "auto":
             return self.order
-        return "model" if self.planner == "learned" else "plan"
+        return get_planner(self.planner).default_order
 
     @property
     def uses_model(self) -> bool:
         """Whether the run loads a cost model (to search with, or to order streams)."""
-        return get_planner(self.planner).uses_model or (
-            self.planner != "sequential" and self.stream_order == "model"
-        )
+        spec = get_planner(self.planner)
+        return spec.uses_model or (spec.kind.name != "sequential" and self.stream_order == "model")
 
 
 @dataclass(frozen=True)

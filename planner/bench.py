@@ -20,6 +20,7 @@ from typing import Any
 from planner import __version__
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.experiment import Trial, TrialResult, run_trials
+from planner.planners import get_planner
 from planner.runs import ORDERS, PLANNERS, RunConfig
 from planner.store import BenchTrialRecord, RunStore
 
@@ -68,7 +69,8 @@ class BenchConfig:
 
     def uses_model(self, planner: str) -> bool:
         """Does ``planner`` load the model in this benchmark (to search, or to order)?"""
-        return planner == "learned" or (self.order == "model" and planner != "sequential")
+        spec = get_planner(planner)
+        return spec.uses_model or (self.order == "model" and spec.kind.name != "sequential")
 
 
 def make_config(
@@ -85,11 +87,16 @@ def make_config(
     """A checked configuration; :class:`BenchError` names what is wrong. A learned planner with
     no ``model`` takes the domain's own model, or runs on per-stream priors when it has none."""
     names = tuple(p.strip() for p in planners if p.strip())
-    unknown = [p for p in names if p not in PLANNERS]
+    unknown = []
+    for p in names:
+        try:
+            get_planner(p)
+        except ValueError as exc:
+            unknown.append(f"{p!r} ({exc})")
     if not names or unknown:
         raise BenchError(
-            f"unknown planner(s) {', '.join(map(repr, unknown)) or '(none given)'} "
-            f"(known: {', '.join(PLANNERS)})"
+            f"unknown planner(s) {', '.join(unknown) or '(none given)'} "
+            f"(known: {', '.join(PLANNERS)}, or variants such as learned:shared_culprits=off)"
         )
     if len(set(names)) != len(names):
         raise BenchError(f"a planner is listed twice: {', '.join(names)}")
@@ -101,7 +108,7 @@ def make_config(
         raise BenchError(f"--budget must be in (0, {MAX_BUDGET_S:.0f}] seconds, got {budget_s}")
     if order not in ORDERS:
         raise BenchError(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
-    needs_model = "learned" in names or order == "model"
+    needs_model = any(get_planner(p).uses_model for p in names) or order == "model"
     if model is not None and not needs_model:
         raise BenchError(
             "--model is only used by the learned planner or --order model, neither is asked"

@@ -36,7 +36,7 @@ from planner.domains import (
     scene_refs,
 )
 from planner.pddl import PDDLError, Problem
-from planner.planners import DEFAULT_PLANNER, PLANNERS
+from planner.planners import DEFAULT_PLANNER, PLANNERS, get_planner
 from planner.plans import PlanFileError
 from planner.scene import SceneError
 from planner.streams import StreamBindingError
@@ -74,6 +74,20 @@ def _count(text: str) -> int:
     if not 1 <= value <= 100_000:
         raise argparse.ArgumentTypeError(f"expected a number from 1 to 100000, got {value}")
     return value
+
+
+def _planner(text: str) -> str:
+    try:
+        get_planner(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+PLANNER_HELP = (
+    f"a planner ({', '.join(PLANNERS)}) or a variant such as learned:shared_culprits=off "
+    "(docs/search.md)"
+)
 
 
 def _positive(text: str) -> float:
@@ -129,7 +143,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--scene", required=True, help="scene name (see `tamp scenes`) or path")
     pl.add_argument("--domain", help=DOMAIN_HELP)
     pl.add_argument("--seed", type=int, default=0, help="scene randomisation and sampler seed")
-    pl.add_argument("--planner", choices=PLANNERS, default=DEFAULT_PLANNER, help="planner")
+    pl.add_argument("--planner", type=_planner, default=DEFAULT_PLANNER, help=PLANNER_HELP)
     pl.add_argument("--k", type=_k, default=50, help="skeletons from top-k (default 50)")
     pl.add_argument("--budget", type=_positive, default=300.0, help="seconds (default 300)")
     pl.add_argument("--out", type=Path, help="write the bound plan here (JSON)")
@@ -160,7 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     co.add_argument("--scene", required=True, help="scene name or path")
     co.add_argument("--domain", help=DOMAIN_HELP)
-    co.add_argument("--planner", choices=PLANNERS, default=DEFAULT_PLANNER)
+    co.add_argument("--planner", type=_planner, default=DEFAULT_PLANNER, help=PLANNER_HELP)
     co.add_argument("--trials", type=_count, default=100, help="number of seeds (default 100)")
     co.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
     co.add_argument("--budget", type=_positive, default=300.0, help="seconds per trial")
@@ -176,7 +190,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     be.add_argument("--scene", help="scene name or path (required unless --resume)")
     be.add_argument("--domain", help=DOMAIN_HELP)
-    be.add_argument("--planners", default="baseline,learned", help="comma-separated")
+    be.add_argument(
+        "--planners",
+        default="baseline,learned",
+        help="comma-separated planners or variants: baseline,paper,learned,"
+        "learned:shared_culprits=off",
+    )
     be.add_argument("--trials", type=int, default=20, help="seeds (default 20)")
     be.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")
     be.add_argument("--budget", type=float, default=300.0, help="seconds per trial")

@@ -72,7 +72,7 @@ def run_trial(trial: Trial, db: str) -> TrialResult:
         order=trial.order,
         domain=trial.domain,
         # A learned trial with no model for its domain runs on the priors of this store.
-        priors_db=db if trial.model is None and trial.planner == "learned" else None,
+        priors_db=db if trial.model is None else None,
     )
     preload_libraries(config)
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config))

@@ -2,11 +2,17 @@
 events. One registry (:data:`PLANNERS`, :func:`get_planner`), as the top-k backends have.
 
 - ``baseline``: eTAMP's progressive-widening tree search (Ren et al.);
-- ``learned``: the tree search guided by per-stream models of success and cost (Bradley & Roy):
-  the domain's trained model, or, without one, per-stream priors (success rates and mean costs
-  of recorded queries, or uniform figures), which it says in one warning line;
+- ``paper``: exactly Bradley & Roy's planner: UCT on -Q (Eq. 4 from the per-stream models),
+  "query again" as one more action, the stream plans' own order, no other addition;
+- ``learned``: the paper's planner with the additions measured to pay
+  (:class:`~planner.search.learned.LearnedConfig`), the best configuration;
 - ``sequential``: binds each skeleton's streams in order, with retries and restarts (the
   simplest thing that works, kept as a reference).
+
+A learned planner uses the domain's trained model, or, without one, per-stream priors (success
+rates and mean costs of recorded queries, or uniform figures), which it says in one warning
+line. A **variant** changes parts of ``paper`` or ``learned`` by name:
+``learned:shared_culprits=off``, ``paper:dead_ends=on:c_explore=0.1`` (:func:`get_planner`).
 
 A planner gets a :class:`PlanningTask` (the problem, its abstract plans, the stream runtime) and
 returns a :class:`PlannerOutcome`; :func:`planner.api.solve` does the rest (top-k, events, the
@@ -19,7 +25,7 @@ import logging
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Collection, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -176,15 +182,13 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
 class _TreeSearchPlanner(Planner):
     """A tree search over stream bindings; subclasses give the policy."""
 
-    default_order: ClassVar[str] = "plan"
-
     def __init__(self, config: RunConfig) -> None:
         super().__init__(config)
         self.predictor: Predictor | None = None
 
     @property
     def order(self) -> str:
-        return self.default_order if self.config.order == "auto" else self.config.order
+        return "plan" if self.config.order == "auto" else self.config.order
 
     def prepare(self, task: PlanningTask) -> PlanningTask:
         task.states = [stream_contexts(p, task.loaded.domain, task.problem) for p in task.plans]
@@ -234,9 +238,23 @@ class BaselinePlanner(_TreeSearchPlanner):
 
 
 class LearnedPlanner(_TreeSearchPlanner):
+    """The learned tree search with the parts of its :class:`LearnedConfig`."""
+
     name = "learned"
     uses_model = True
-    default_order = "model"
+
+    def __init__(self, config: RunConfig, parts: LearnedConfig | None = None) -> None:
+        super().__init__(config)
+        parts = parts if parts is not None else LearnedConfig()
+        if config.c_explore is not None:
+            parts = replace(parts, c_explore=config.c_explore)
+        self.parts = parts
+
+    @property
+    def order(self) -> str:
+        if self.config.order != "auto":
+            return self.config.order
+        return "model" if self.parts.model_order else "plan"
 
     def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
         assert self.predictor is not None  # prepare() loaded it
@@ -252,7 +270,6 @@ class LearnedPlanner(_TreeSearchPlanner):
                 q=q,
             )
 
-        c = self.config.c_explore
         return LearnedPolicy(
             self.predictor,
             task.plans,
@@ -260,7 +277,7 @@ class LearnedPlanner(_TreeSearchPlanner):
             task.initial,
             task.loaded.encode,
             task.fluents,
-            LearnedConfig() if c is None else LearnedConfig(c),
+            self.parts,
             on_prediction=report,
             evidence_ignore=frozenset(task.loaded.spec.evidence_ignore),
             static_context=task.static_context,
@@ -413,15 +430,52 @@ def _trajectories(bound: BoundPlan) -> list[Any]:
 
 # --- the registry ------------------------------------------------------------------------------
 
-PLANNERS: dict[str, type[Planner]] = {
-    p.name: p for p in (BaselinePlanner, LearnedPlanner, SequentialPlanner)
+
+@dataclass(frozen=True)
+class PlannerSpec:
+    """A planner by name, with a learned planner's parts; call it with a run's config."""
+
+    name: str  # as given: "learned:shared_culprits=off"
+    kind: type[Planner]
+    parts: LearnedConfig | None = None  # the learned planners' configuration
+
+    @property
+    def uses_model(self) -> bool:
+        return self.kind.uses_model
+
+    @property
+    def default_order(self) -> str:
+        if self.parts is not None:
+            return "model" if self.parts.model_order else "plan"
+        return "plan"
+
+    def __call__(self, config: RunConfig) -> Planner:
+        if self.kind is LearnedPlanner:
+            return LearnedPlanner(config, self.parts)
+        return self.kind(config)
+
+
+# name -> (planner class, its parts): "paper" and "learned" are one class, two configurations.
+_NAMED: dict[str, tuple[type[Planner], Callable[[], LearnedConfig] | None]] = {
+    "baseline": (BaselinePlanner, None),
+    "paper": (LearnedPlanner, LearnedConfig.paper),
+    "learned": (LearnedPlanner, LearnedConfig),
+    "sequential": (SequentialPlanner, None),
 }
+PLANNERS: tuple[str, ...] = tuple(_NAMED)  # the named planners
 DEFAULT_PLANNER = "baseline"
 
 
-def get_planner(name: str) -> type[Planner]:
-    """The planner called ``name``; an unknown name lists the known ones."""
-    try:
-        return PLANNERS[name]
-    except KeyError:
-        raise ValueError(f"unknown planner {name!r} (known: {', '.join(PLANNERS)})") from None
+def get_planner(spec: str) -> PlannerSpec:
+    """The planner ``spec`` names: a named planner, or a learned one's variant
+    ``NAME:FIELD=VALUE[:FIELD=VALUE...]`` (the fields of :class:`LearnedConfig`); an unknown
+    name or field lists the known ones."""
+    name, _, settings = spec.partition(":")
+    if name not in _NAMED:
+        raise ValueError(f"unknown planner {name!r} (known: {', '.join(PLANNERS)})")
+    kind, make = _NAMED[name]
+    if make is None:
+        if settings:
+            raise ValueError(f"planner {name!r} has no parts to set (only paper and learned do)")
+        return PlannerSpec(spec, kind)
+    return PlannerSpec(spec, kind, make().with_settings(settings))

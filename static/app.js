@@ -235,7 +235,7 @@ function syncForm() {
   el.sceneDescription.textContent = scene
     ? `${scene.description}${scene.domain ? ` (${scene.domain} domain)` : ""}`
     : "";
-  const learned = el.planner.value === "learned";
+  const learned = usesModel(el.planner.value);
   el.modelField.hidden = !learned;
   if (!learned) return;
   const models = app.models.filter((m) => !scene || !m.domain || m.domain === scene.domain);
@@ -251,6 +251,12 @@ function syncForm() {
     : `<option value="">none for this domain: per-stream priors</option>`;
   const keep = models.find((m) => m.name === chosen) ?? models.find((m) => m.default);
   if (keep) el.model.value = keep.name;
+}
+
+/** The learned planners (paper, learned and their variants such as learned:calibration=off). */
+function usesModel(planner) {
+  const name = String(planner ?? "").split(":")[0];
+  return name === "learned" || name === "paper";
 }
 
 el.scene.addEventListener("change", syncForm);
@@ -270,7 +276,7 @@ el.form.addEventListener("submit", async (e) => {
     seed: el.seed.value === "" ? 0 : Number(el.seed.value),
     budget_s: el.budget.value === "" ? 120 : Number(el.budget.value),
   };
-  if (body.planner === "learned" && el.model.value) body.model = el.model.value;
+  if (usesModel(body.planner) && el.model.value) body.model = el.model.value;
   el.submit.disabled = true;
   el.submit.textContent = "Launching…";
   try {
@@ -693,7 +699,7 @@ function renderInspector() {
   let html = `<dl class="kv">${rows.join("")}</dl>`;
   const p = node.pred;
   const noModels =
-    tree.run && tree.run.planner !== "learned"
+    tree.run && !usesModel(tree.run.planner)
       ? ` (the ${escapeHtml(tree.run.planner)} planner has no models)`
       : "";
   html += p

@@ -22,7 +22,8 @@ from planner.search.baseline import (
     success_value,
     ucb,
 )
-from planner.search.reuse import query_identity, reusable_streams
+from planner.search.queries import query_context, query_identity
+from planner.search.reuse import reusable_streams
 from planner.search.tree import ROOT, Node, Tree
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
@@ -57,6 +58,10 @@ class Policy(Protocol):
 
     def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
         """The value of a failed query or a fully bound plan."""
+        ...
+
+    def observe(self, tree: Tree, nodes: Sequence[Node]) -> None:
+        """The nodes one iteration made (its expansion and rollout), after its backup."""
         ...
 
 
@@ -98,6 +103,9 @@ class BaselinePolicy:
             return success_value([1.0] * len(plan.actions), self.config)
         return failure_value(leaf.depth - 1, depth, self.config)
 
+    def observe(self, tree: Tree, nodes: Sequence[Node]) -> None:
+        return None
+
 
 @dataclass
 class SearchResult:
@@ -121,16 +129,15 @@ def context_json(
     static_context: Mapping[str, Any],
     encode: Callable[[Any], Any],
 ) -> dict[str, Any]:
-    """What a query's ``stream_queried`` event records of the world its sampler saw: the
-    fluent facts of its context, the encoded values of their objects, the static context."""
-    facts = sorted(a for a in context.state if a.predicate in fluents)
-    names = {x for a in facts for x in a.args}
-    values = {
-        n: encode(context.values[n])
-        for n in sorted(names)
-        if n in context.values and not isinstance(context.values[n], str)
-    }
-    return {**static_context, "facts": [[a.predicate, *a.args] for a in facts], "values": values}
+    """What a query's ``stream_queried`` event records of the world its sampler saw
+    (:func:`planner.search.queries.query_context`: the same context the models read)."""
+    return query_context(
+        context.state,
+        context.values,
+        fluents=fluents,
+        static_context=static_context,
+        encode=encode,
+    )
 
 
 class TreeSearch:
@@ -348,6 +355,7 @@ class TreeSearch:
                 plans_added += 1
             else:
                 node = self.policy.pick_plan(tree)
+            made = len(tree.nodes)
             leaf: Node | None = None
             while leaf is None:
                 if self._complete(node):
@@ -362,6 +370,7 @@ class TreeSearch:
                 else:
                     node = self.policy.pick_child(tree, node)
             self._backup(leaf)
+            self.policy.observe(tree, tree.nodes[made:])
             self._say(start)
             if self._complete(leaf):
                 solution = leaf

@@ -1,25 +1,18 @@
 """Which queries the search may answer with an earlier identical query's result.
 
-A query is identified by its stream, its encoded inputs and its context (the fluent facts of
-its plan's state, their values, the scene's static facts): the same JSON the search records and
-the models read. A success may stand in for a new query only where nothing downstream depends
+A query is identified by its stream, its encoded inputs and its context
+(:mod:`planner.search.queries`: the same JSON the search records and the models read). A
+success may stand in for a new query only where nothing downstream depends
 on which sample it is: no later stream takes its outputs, no fluent fact holds them (in the
 kitchen, a motion's trajectory, which only the action that moves uses).
 """
 
 from __future__ import annotations
 
-import json
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Sequence
 
 from planner.abstract.skeleton import AbstractPlan
 from planner.pddl.structs import Atom
-
-
-def query_identity(stream: str, inputs: Sequence[Any], context: Mapping[str, Any]) -> str:
-    """The identity of a query from its encoded inputs and its context (see the module)."""
-    return json.dumps([stream, list(inputs), dict(context)], sort_keys=True, default=str)
 
 
 def reusable_streams(

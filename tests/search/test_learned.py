@@ -447,7 +447,7 @@ def test_an_attempt_that_has_not_reached_the_failures_does_not_stop_the_pooling(
     for node in nodes:
         node.visits = 3
     policy.pick_plan(tree)
-    dead = policy._dead
+    dead = policy.dead
     assert placed[0].id in dead and placed[2].id in dead and placed[1].id not in dead
     assert makers[0].id in dead and makers[2].id in dead  # one dead child each, pooled to two
     assert makers[1].id not in dead  # its own attempt is still open
@@ -488,12 +488,12 @@ def test_a_query_failing_under_varied_later_choices_blames_the_earlier_ones_it_s
     for node in testers[:2]:
         search_tree.add(node.id, plan_index=0, depth=6, success=False)
     policy.pick_plan(search_tree)
-    assert placed_a.id not in policy._dead  # twice could be the poses of b
+    assert placed_a.id not in policy.dead  # twice could be the poses of b
     assert not policy.expand(search_tree, choose_a)
     search_tree.add(testers[2].id, plan_index=0, depth=6, success=False)
     policy.pick_plan(search_tree)
-    assert placed_a.id in policy._dead and all(t.id in policy._dead for t in testers)
-    assert choose_a.id not in policy._dead  # the one to choose again
+    assert placed_a.id in policy.dead and all(t.id in policy.dead for t in testers)
+    assert choose_a.id not in policy.dead  # the one to choose again
     assert policy.expand(search_tree, choose_a)  # now: sample another pose for a
 
 
@@ -505,5 +505,5 @@ def test_a_success_under_the_shared_choices_clears_them() -> None:
         tree.add(node.id, plan_index=0, depth=6, success=False)
     tree.add(testers[3].id, plan_index=0, depth=6, success=True)
     policy.pick_plan(tree)
-    assert placed_a.id not in policy._dead
+    assert placed_a.id not in policy.dead
     assert not policy.expand(tree, choose_a)

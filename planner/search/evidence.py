@@ -1,0 +1,269 @@
+"""What failed queries teach the learned search, apart from the policy that reads it.
+
+- **Outcomes of a query** (``attempt_posterior``, ``pooled_evidence``): how often a node's next
+  query succeeded and failed from it; pooled, over every node that makes the same query (one
+  identity, :func:`planner.search.queries.query_identity`), so a failure seen anywhere counts.
+- **Dead ends** (``dead_ends``): a node whose next query has failed, or led only to dead ends,
+  more often in a row than its prediction explains (:func:`planner.search.costs.dead_after`).
+  Its reason is the objects those failures depend on; if the node's own outputs are not among
+  them, re-sampling them cannot help, so its parent is a dead end too, and so on up to the node
+  that bound something the failures depend on (backjumping). A dead end counts as a failed
+  attempt of its parent's query.
+- **Shared culprits** (``shared_culprits``): a query that keeps failing while a later choice it
+  depends on varies is blamed on the earlier choices every failure shared (the same query is
+  then never asked twice, so its identity alone cannot pool it).
+
+:class:`Evidence` recomputes all of it at each refresh from the tree and from what the policy
+knows of each node (:class:`NodeQueries`); it holds no policy state.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from planner.search.costs import P_MAX, P_MIN, StreamCost, dead_after
+from planner.search.tree import ROOT, Node, Tree
+
+SHARED_MIN = 3  # failures under varied later choices before the earlier ones they share are blamed
+MAX_ROUNDS = 64  # rounds of dead ends failing their parents' queries (a fixpoint comes first)
+
+
+class NodeQueries(Protocol):
+    """What the evidence reads of a node that queries: the identity of its next query (None
+    while an input is unbound), that query's prediction, and the objects its outcome depends
+    on (its inputs and the objects of the facts of its identity)."""
+
+    def key(self, node: Node) -> str | None: ...
+
+    def first(self, node: Node) -> StreamCost | None: ...
+
+    def relevant(self, node: Node) -> set[str]: ...
+
+
+@dataclass
+class Evidence:
+    """Outcomes and dead ends as of the last :meth:`refresh` (see the module)."""
+
+    queries: NodeQueries
+    encode: Callable[[Any], Any]
+    initial_values: Mapping[str, Any]
+    pooled: bool = True  # pooled_evidence
+    dead_ends: bool = True  # dead_ends
+    shared_culprits: bool = True  # shared_culprits
+    use_prior: bool = True  # dead_end_prior: a foreseen dead end is dead sooner
+    p_min: float = P_MIN
+    p_max: float = P_MAX
+    groups: dict[str, list[int]] = field(default_factory=dict)  # identity -> nodes that make it
+    counts: dict[str, tuple[int, int]] = field(default_factory=dict)  # identity -> ok, failed
+    dead: set[int] = field(default_factory=set)
+    _sigs: dict[int, tuple[dict[str, str], dict[str, int]]] = field(default_factory=dict)
+
+    def add_maker(self, key: str, node: int) -> None:
+        """``node``'s children are attempts of the query ``key``."""
+        self.groups.setdefault(key, []).append(node)
+
+    def outcomes(self, tree: Tree, node: Node | None, key: str | None) -> tuple[int, int] | None:
+        """(ok, failed) attempts of query ``key`` as ``node``'s next query (``node`` None: a
+        query further ahead). Pooled: over every node that makes it; else ``node``'s own
+        attempts only (none for a query further ahead). A dead end is a failed attempt."""
+        if self.pooled:
+            return self.counts.get(key) if key is not None else None
+        if node is None or not node.children:
+            return None
+        ok = sum(1 for c in node.children if tree[c].success and c not in self.dead)
+        return ok, len(node.children) - ok
+
+    @property
+    def any(self) -> bool:
+        """Whether any outcome is known (nothing to update otherwise)."""
+        return bool(self.counts) if self.pooled else True
+
+    def refresh(self, tree: Tree) -> None:
+        """Dead ends, then the outcomes of every query made (outcomes only, never measured
+        seconds: the same seed makes the same search)."""
+        self.dead = self._dead_ends(tree) if self.dead_ends else set()
+        counts: dict[str, tuple[int, int]] = {}
+        for key, makers in self.groups.items():
+            ok = failed = 0
+            for n in makers:
+                for c in tree[n].children:
+                    if tree[c].success and c not in self.dead:
+                        ok += 1
+                    else:
+                        failed += 1
+            if ok or failed:
+                counts[key] = (ok, failed)
+        self.counts = counts
+
+    # --- dead ends ---------------------------------------------------------------------------
+
+    def _dead_after(self, cost: StreamCost) -> int:
+        prior = cost.p_prior if self.use_prior else None
+        return dead_after(cost.p_s, p_prior=prior, p_min=self.p_min, p_max=self.p_max)
+
+    def _dead_ends(self, tree: Tree) -> set[int]:
+        """Nodes whose every continuation is taken to fail (see the module). A fresh attempt
+        elsewhere that has not yet reached the failing depth does not stop the pooling."""
+        deepest = _deepest(tree)
+        dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
+        origin: dict[int, int] = {}  # dead node -> depth of the failures behind it
+        shared = self._shared_culprits(tree) if self.shared_culprits else []
+        for _ in range(MAX_ROUNDS):  # new dead ends fail their parents' queries: pool again
+            pooled = self._pooled_failures(tree, dead, origin, deepest) if self.pooled else {}
+            before = len(dead), sum(len(r) for r in dead.values())
+            for node, reason in shared:
+                if dead.get(node.id) == reason:
+                    continue
+                depth = min(origin.get(c, tree[c].depth) for c in node.children)
+                _mark(tree, dead, origin, node, reason, depth)
+            for node in reversed(tree.nodes[1:]):
+                if node.id in dead or not node.success or node.depth == 0:
+                    continue
+                first = self.queries.first(node)
+                if first is None or not node.children:
+                    continue  # complete, or not queried from yet
+                if any(tree[c].success and c not in dead for c in node.children):
+                    continue
+                key = self.queries.key(node)
+                failures = max(len(node.children), pooled.get(key, 0) if key is not None else 0)
+                if failures < self._dead_after(first):
+                    continue
+                reason = self.queries.relevant(node)
+                depth = min(origin.get(c, tree[c].depth) for c in node.children)
+                for c in node.children:
+                    if c in dead:
+                        reason |= dead[c] - set(tree[c].outputs)
+                _mark(tree, dead, origin, node, reason, depth)
+            if (len(dead), sum(len(r) for r in dead.values())) == before:
+                break
+        return set(dead)
+
+    def _pooled_failures(
+        self,
+        tree: Tree,
+        dead: Mapping[int, set[str]],
+        origin: Mapping[int, int],
+        deepest: Mapping[int, int],
+    ) -> dict[str, int]:
+        """Per query identity: how often it has failed, or led only to a dead end, over every
+        node that made it; left out while an attempt that is not a dead end got past the
+        depth where those failures happened."""
+        out: dict[str, int] = {}
+        for key, makers in self.groups.items():
+            children = [c for n in makers for c in tree[n].children]
+            bad = [c for c in children if not tree[c].success or c in dead]
+            if not bad:
+                continue
+            depth = min(origin.get(c, tree[c].depth) for c in bad)
+            if not any(
+                tree[c].success and c not in dead and deepest.get(c, -1) >= depth for c in children
+            ):
+                out[key] = len(bad)
+        return out
+
+    def _signature(self, tree: Tree, node: Node) -> tuple[dict[str, str], dict[str, int]]:
+        """The values of the objects ``node``'s next query depends on, encoded so that equal
+        values compare equal, and the depth that bound each (0: the problem's own objects)."""
+        cached = self._sigs.get(node.id)
+        if cached is not None:
+            return cached
+        values = dict(self.initial_values)
+        bound_at: dict[str, int] = {}
+        for i in tree.path(node.id):
+            for name, value in tree[i].outputs.items():
+                values[name] = value
+                bound_at[name] = tree[i].depth
+        sig = {
+            name: json.dumps(self.encode(values[name]), sort_keys=True, default=str)
+            for name in sorted(self.queries.relevant(node))
+            if name in values
+        }
+        cached = (sig, {name: bound_at.get(name, 0) for name in sig})
+        self._sigs[node.id] = cached
+        return cached
+
+    def _shared_culprits(self, tree: Tree) -> list[tuple[Node, set[str]]]:
+        """Per stream of a plan: take the latest node whose query there failed every time it
+        was made, and the values that query depended on; from the deepest choice up, drop the
+        values bound last until the nodes whose query agrees on the rest have failed at least
+        :data:`SHARED_MIN` times (and as often as ``dead_after`` asks) with no success among
+        them, and differ in what was dropped. Those nodes are dead ends because of the values
+        kept, and the search backs up to the last of them."""
+        groups: dict[tuple[int, int], list[Node]] = {}
+        for node in tree.nodes[1:]:
+            if (
+                node.success
+                and node.depth > 0
+                and node.children
+                and self.queries.first(node) is not None
+            ):
+                groups.setdefault((node.plan_index, node.depth), []).append(node)
+        out: list[tuple[Node, set[str]]] = []
+
+        def failed(n: Node) -> bool:  # the query itself failed, every time it was made here
+            return not any(tree[c].success for c in n.children)
+
+        for makers in groups.values():
+            failing = [n for n in makers if failed(n)]
+            if len(failing) < SHARED_MIN:
+                continue
+            latest = failing[-1]
+            sig, bound_at = self._signature(tree, latest)
+            first = self.queries.first(latest)
+            assert first is not None
+            need = max(SHARED_MIN, self._dead_after(first))
+            depths = sorted(set(bound_at.values()), reverse=True)
+            for cut in depths[1:]:  # the deepest cut is the query's identity: pooled already
+                kept = {n: v for n, v in sig.items() if bound_at[n] <= cut}
+                agree = [m for m in makers if self._agrees(tree, m, kept)]
+                if not all(failed(m) for m in agree):
+                    break  # a success shares these values: so would every shallower cut's
+                failures = sum(len(m.children) for m in agree)
+                if failures < need:
+                    continue
+                if len({tuple(self._signature(tree, m)[0].items()) for m in agree}) < 2:
+                    continue  # the same query each time: its identity pools it
+                reason = set(kept)
+                out += [(m, reason) for m in agree]
+                break
+        return out
+
+    def _agrees(self, tree: Tree, node: Node, kept: Mapping[str, str]) -> bool:
+        sig = self._signature(tree, node)[0]
+        return all(sig.get(n) == v for n, v in kept.items())
+
+
+def _mark(
+    tree: Tree,
+    dead: dict[int, set[str]],
+    origin: dict[int, int],
+    node: Node,
+    reason: set[str],
+    depth: int,
+) -> None:
+    """Take ``node`` for a dead end because of ``reason`` (the objects its failures, at
+    ``depth``, depend on), and its ancestors up to the one that bound one of them."""
+    current = node
+    dead[current.id] = reason
+    origin[current.id] = depth
+    while not (set(current.outputs) & reason) and current.parent is not None:
+        parent = tree[current.parent]
+        if parent.depth == 0 or parent.id == ROOT:
+            break
+        dead[parent.id] = reason
+        origin[parent.id] = depth
+        current = parent
+
+
+def _deepest(tree: Tree) -> dict[int, int]:
+    """Per node, the depth of the deepest success in its subtree (itself included)."""
+    deepest: dict[int, int] = {}
+    for node in reversed(tree.nodes[1:]):
+        mine = node.depth if node.success else -1
+        deepest[node.id] = max(mine, deepest.get(node.id, -1))
+        if node.parent is not None:
+            deepest[node.parent] = max(deepest.get(node.parent, -1), deepest[node.id])
+    return deepest
