@@ -3,29 +3,50 @@
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from app.catalog import NAME
 from planner.store import RunRecord
 
 PlannerName = Literal["baseline", "learned", "sequential"]
 StatusName = Literal["queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted"]
 
+MAX_SEQ = 2**31 - 1  # event numbers and steps: far more than any run has
+
+# Request bodies: no unknown fields, no coercion ("0" is not a number, true is not 1), finite
+# numbers only, so the OpenAPI schema says exactly what the server accepts.
+REQUEST = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+SceneName = Annotated[
+    str,
+    Field(
+        pattern=NAME.pattern,
+        description="a scene name offered by GET /api/scenes: a letter or digit, then up to 99 "
+        "letters, digits, '_', '.' or '-' (no paths); another name is a 422 listing the scenes",
+        examples=["line-2", "kitchen-1"],
+    ),
+]
+ModelName = Annotated[
+    str,
+    Field(
+        pattern=NAME.pattern,
+        description="learned only: a model name offered by GET /api/models (same characters "
+        "as a scene name); another name is a 422 listing the models",
+        examples=["kitchen"],
+    ),
+]
+
 
 class RunRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = REQUEST
 
-    scene: str = Field(min_length=1, max_length=100, description="a scene name (GET /api/scenes)")
+    scene: SceneName
     planner: PlannerName = "baseline"
     seed: int = Field(0, ge=0, le=2**31 - 1)
     budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
-    model: str | None = Field(
-        None,
-        min_length=1,
-        max_length=100,
-        description="learned only: a model name (GET /api/models)",
-    )
+    model: ModelName | None = None
     k: int = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
 
 
@@ -107,14 +128,16 @@ class Health(BaseModel):
     running: int
     queued: int
     viewer_url: str | None
-    database: str
+    database: str = Field(description="the kind of database (sqlite, postgresql), not where")
 
 
 class ViewerRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = REQUEST
 
     run_id: str = Field(min_length=1, max_length=64)
-    step: int | None = Field(None, ge=0, description="show events 0..step; null: all, live")
+    step: int | None = Field(
+        None, ge=0, le=MAX_SEQ, description="show events 0..step; null: all, live"
+    )
 
 
 class ViewerState(BaseModel):
@@ -126,3 +149,23 @@ class ViewerState(BaseModel):
 class Report(BaseModel):
     name: str
     url: str
+
+
+class ErrorOut(BaseModel):
+    """Any error but a bad field: unknown run (404), already over (409), full queue (429),
+    foreign Host (400), missing token (401), foreign origin (403), body too large (413)."""
+
+    detail: str
+
+
+class FieldError(BaseModel):
+    loc: list[str | int] = Field(description="where: body / query / path, then the field")
+    msg: str
+    type: str
+    input: Any = Field(None, description="the start of the value given, when it is short")
+
+
+class ValidationErrorOut(BaseModel):
+    """A 422: one entry per bad field (the first 20)."""
+
+    detail: list[FieldError]

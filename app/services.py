@@ -2,19 +2,27 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
+from collections import OrderedDict
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from fastapi.concurrency import run_in_threadpool
 
 from app import catalog
 from app.hub import EventDict, EventHub
 from app.manager import RunManager
+from app.schemas import Run, RunPage
 from app.settings import Settings
 from app.viewing import Viewer, ViewerService
 from planner.events import event_to_dict
 from planner.runs import RunConfig
 from planner.store import LIVE_STATUSES, RunRecord, RunStore
+
+if TYPE_CHECKING:
+    from app.viewgate import ViewerGate
 
 log = logging.getLogger(__name__)
 
@@ -28,15 +36,73 @@ class RequestError(ValueError):
         self.field = field
 
 
+PageKey = tuple[str | None, str | None, str | None, int, int]  # filters, limit, offset
+
+
+class RunPages:
+    """Pages of ``GET /api/runs``, serialised once per change of the database.
+
+    Listing runs is what every open page asks for every few seconds; under many concurrent
+    requests the query and the serialisation were the server's whole CPU. A page is kept
+    with the store's :meth:`~planner.store.RunStore.data_version` it was read at and served
+    again while that is unchanged (any commit by anyone, a ``tamp plan`` on the same file
+    included, changes it); concurrent misses of one page share one read. Used on the event
+    loop only. A database that cannot tell its version is read every time.
+    """
+
+    def __init__(self, store: RunStore, size: int = 64) -> None:
+        self.store = store
+        self.size = size
+        self._pages: OrderedDict[PageKey, tuple[int, bytes]] = OrderedDict()
+        self._reading: dict[tuple[PageKey, int], asyncio.Future[bytes]] = {}
+
+    async def get(self, key: PageKey) -> bytes:
+        version = self.store.data_version()
+        if version is None:
+            return await run_in_threadpool(self._read, key)
+        cached = self._pages.get(key)
+        if cached is not None and cached[0] == version:
+            self._pages.move_to_end(key)
+            return cached[1]
+        reading = self._reading.get((key, version))
+        if reading is None:
+            reading = asyncio.ensure_future(run_in_threadpool(self._read, key))
+            self._reading[(key, version)] = reading
+            reading.add_done_callback(lambda done: self._keep(key, version, done))
+        return await asyncio.shield(reading)
+
+    def _keep(self, key: PageKey, version: int, done: asyncio.Future[bytes]) -> None:
+        self._reading.pop((key, version), None)
+        if done.cancelled() or done.exception() is not None:
+            return
+        self._pages[key] = (version, done.result())
+        self._pages.move_to_end(key)
+        while len(self._pages) > self.size:
+            self._pages.popitem(last=False)
+
+    def _read(self, key: PageKey) -> bytes:
+        status, scene, planner, limit, offset = key
+        runs = self.store.list_runs(
+            status=status, scene=scene, planner=planner, limit=limit, offset=offset
+        )
+        total = self.store.count_runs(status=status, scene=scene, planner=planner)
+        page = RunPage(runs=[Run.of(r) for r in runs], total=total, limit=limit, offset=offset)
+        return page.model_dump_json().encode()
+
+
 class Dashboard:
-    def __init__(self, settings: Settings, *, viewer: Viewer | None = None) -> None:
+    def __init__(
+        self,
+        settings: Settings,
+        *,
+        viewer: Viewer | None = None,
+        viewer_gate: ViewerGate | None = None,
+    ) -> None:
         self.settings = settings
         self.store = RunStore(settings.database_url)
-        interrupted = self.store.mark_interrupted()
-        if interrupted:
-            log.warning(
-                "%d run(s) left unfinished by an earlier server are now 'interrupted'", interrupted
-            )
+        settled = self.store.mark_interrupted()
+        if settled:
+            log.warning("%d run(s) whose process had stopped are now finished", settled)
         self.hub = EventHub(client_limit=settings.ws_queue_events)
         self.models = catalog.Models(settings.model_dir)
         self.manager = RunManager(
@@ -48,12 +114,29 @@ class Dashboard:
             cancel_grace_s=settings.cancel_grace_s,
         )
         self.viewer = ViewerService(viewer, self.store, self.hub)
+        self.viewer_gate = viewer_gate
+        self.pages = RunPages(self.store)
         self.reports_dir = settings.reports_dir
 
     def close(self) -> None:
         self.manager.close()
+        if self.viewer_gate is not None:
+            self.viewer_gate.close()
         self.viewer.close()
         self.store.close()
+
+    def viewer_url(self, host_header: str | None) -> str | None:
+        """The 3D view's address for a page that reached the dashboard as ``host_header``
+        (the same name, so the token cookie and the framing rule apply); None without one."""
+        if self.viewer_gate is None:
+            return None
+        return self.viewer_gate.url(host_header)
+
+    async def runs_page(
+        self, status: str | None, scene: str | None, planner: str | None, limit: int, offset: int
+    ) -> bytes:
+        """One page of ``GET /api/runs`` as JSON (:class:`RunPages`)."""
+        return await self.pages.get((status, scene, planner, limit, offset))
 
     # --- runs ---------------------------------------------------------------------------------
 
@@ -103,13 +186,10 @@ class Dashboard:
         return counts
 
     def events(self, run_id: str, after: int, limit: int) -> tuple[list[EventDict], bool]:
-        """Events with ``seq > after`` (stored, then those still on their way) and whether the
-        run is over with nothing after them."""
+        """Stored events with ``seq > after`` (only stored ones are ever served) and whether
+        the run is over with nothing after them."""
         record = self.store.get_run(run_id)  # KeyError for an unknown run
         events = [event_to_dict(e) for e in self.store.events(run_id, after=after, limit=limit)]
-        if len(events) < limit:
-            last = events[-1]["seq"] if events else after
-            events += (self.hub.events(run_id, after=last) or [])[: limit - len(events)]
         done = record.status not in LIVE_STATUSES and len(events) < limit
         return events, done
 
