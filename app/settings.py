@@ -14,6 +14,7 @@ from planner.runs import DEFAULT_MODEL
 from planner.store import default_db_path
 
 WILDCARD_HOSTS = ("", "0.0.0.0", "::")  # bind every interface
+MIN_TOKEN = 16  # characters of TAMP_TOKEN, so it cannot be guessed
 
 
 def is_loopback(host: str) -> bool:
@@ -52,7 +53,7 @@ class Settings(BaseSettings):
     # Binding beyond loopback needs a token, or this to say anyone who reaches it may use it.
     allow_remote: bool = False
     # A shared secret (TAMP_TOKEN); when set, every request needs it as a bearer token or cookie.
-    token: SecretStr | None = Field(None, min_length=16)
+    token: SecretStr | None = None
     # Host names the server answers besides localhost and the bound address ("*": any).
     allowed_hosts: Annotated[list[str], NoDecode] = Field(default_factory=list)
     # Browser origins allowed besides the dashboard itself ("http://host:port"; "*": any).
@@ -70,6 +71,16 @@ class Settings(BaseSettings):
     @classmethod
     def _empty_is_none(cls, value: object) -> object:
         return None if value == "" else value
+
+    @field_validator("token")
+    @classmethod
+    def _long_enough(cls, value: SecretStr | None) -> SecretStr | None:
+        if value is not None and len(value.get_secret_value()) < MIN_TOKEN:
+            raise ValueError(
+                f"the token must be at least {MIN_TOKEN} characters (one: python -c "
+                "'import secrets; print(secrets.token_urlsafe())')"
+            )
+        return value
 
     @model_validator(mode="after")
     def _remote_needs_consent(self) -> Self:

@@ -15,7 +15,7 @@ import sqlite3
 import threading
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -583,19 +583,19 @@ class RunStore:
         with Session(self.engine) as session:
             return [RunRecord.from_row(r) for r in session.scalars(query)]
 
-    def mark_interrupted(self, message: str = INTERRUPTED) -> int:
+    def mark_interrupted(self, message: str = INTERRUPTED, *, skip: Collection[str] = ()) -> int:
         """Finish the live runs whose process is gone (:meth:`settle_run`: a closing event
         the process stored decides how it ended, else it is ``interrupted`` with a closing
         event added); returns how many. Runs of processes still running (a ``tamp plan`` on
         the same database, another server's workers) are left alone. A server calls it when
-        it starts, and now and then while it runs."""
+        it starts, and now and then while it runs (``skip``: the runs it is finishing itself)."""
         with self.engine.connect() as conn:
             live = conn.execute(
                 select(RunRow.id, RunRow.owner).where(RunRow.status.in_(LIVE_STATUSES))
             ).all()
         settled = 0
         for run_id, owner in live:
-            if is_alive(owner):
+            if run_id in skip or is_alive(owner):
                 continue
             record = self.settle_run(run_id, "interrupted", message)
             if record is not None:
