@@ -13,7 +13,9 @@ from typing import Any
 from fastapi import FastAPI, HTTPException, Request, WebSocket
 from fastapi.exceptions import RequestValidationError, WebSocketRequestValidationError
 from fastapi.responses import FileResponse, JSONResponse
+from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
+from starlette.routing import Match, Route
 
 from app import catalog
 from app.api import router
@@ -116,6 +118,20 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @app.exception_handler(RequestValidationError)
     async def bad_request(_request: Request, exc: RequestValidationError) -> JSONResponse:
         return JSONResponse({"detail": field_errors(exc.errors())}, status_code=422)
+
+    @app.exception_handler(405)
+    async def wrong_method(request: Request, exc: Exception) -> JSONResponse:
+        """Starlette names only the methods of the first route on the path; list them all."""
+        allowed: set[str] = set()
+        for route in app.router.routes:
+            match, _ = route.matches(request.scope)
+            if match == Match.PARTIAL and isinstance(route, APIRoute | Route):
+                allowed |= route.methods or set()
+        return JSONResponse(
+            {"detail": "Method Not Allowed"},
+            status_code=405,
+            headers={"Allow": ", ".join(sorted(allowed))},
+        )
 
     @app.exception_handler(WebSocketRequestValidationError)
     async def bad_websocket(websocket: WebSocket, exc: WebSocketRequestValidationError) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from app.catalog import NAME
 from planner.store import RunRecord
@@ -18,6 +18,16 @@ MAX_SEQ = 2**31 - 1  # event numbers and steps: far more than any run has
 # Request bodies: no unknown fields, no coercion ("0" is not a number, true is not 1), finite
 # numbers only, so the OpenAPI schema says exactly what the server accepts.
 REQUEST = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+
+def _integral(value: Any) -> Any:
+    """JSON's integers: 461 and 461.0 (JSON Schema counts both), never "461" nor true."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    return value
+
+
+Integer = Annotated[int, BeforeValidator(_integral)]  # "integer" exactly as JSON Schema means it
 
 SceneName = Annotated[
     str,
@@ -34,20 +44,22 @@ ModelName = Annotated[
         pattern=NAME.pattern,
         description="learned only: a model name offered by GET /api/models (same characters "
         "as a scene name); another name is a 422 listing the models",
-        examples=["kitchen"],
     ),
 ]
 
 
 class RunRequest(BaseModel):
-    model_config = REQUEST
+    model_config = ConfigDict(
+        **REQUEST,
+        json_schema_extra={"examples": [{"scene": "line-2", "k": 2, "budget_s": 10}]},
+    )
 
     scene: SceneName
     planner: PlannerName = "baseline"
-    seed: int = Field(0, ge=0, le=2**31 - 1)
+    seed: Integer = Field(0, ge=0, le=2**31 - 1)
     budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
     model: ModelName | None = None
-    k: int = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
+    k: Integer = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
 
 
 class Run(BaseModel):
@@ -135,8 +147,8 @@ class ViewerRequest(BaseModel):
     model_config = REQUEST
 
     run_id: str = Field(min_length=1, max_length=64)
-    step: int | None = Field(
-        None, ge=0, le=MAX_SEQ, description="show events 0..step; null: all, live"
+    step: Annotated[int, Field(ge=0, le=MAX_SEQ), BeforeValidator(_integral)] | None = Field(
+        None, description="show events 0..step; null: all, live"
     )
 
 

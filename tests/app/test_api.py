@@ -95,7 +95,8 @@ def test_catalogs_and_health(client: TestClient) -> None:
         ({"scene": "kitchen-1", "planner": "learned", "model": "../kitchen"}, "model", "pattern"),
         ({"scene": "kitchen-1", "planner": "learned", "model": "kitchen-9"}, "model", "unknown"),
         ({"scene": "line-2", "seed": "0"}, "seed", "valid integer"),  # no coercion
-        ({"scene": "line-2", "k": 2.0}, "k", "valid integer"),
+        ({"scene": "line-2", "k": 2.5}, "k", "valid integer"),
+        ({"scene": "line-2", "k": True}, "k", "valid integer"),
         ({"scene": "line-2", "budget_s": True}, "budget_s", "valid number"),
         ({"scene": "line-2", "budget_s": "30"}, "budget_s", "valid number"),
         ({"scene": 7}, "scene", "valid string"),
