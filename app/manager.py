@@ -247,11 +247,14 @@ class RunManager:
         worker.conn.close()
         run_id = worker.run_id
         cancelled = worker.cancel_at is not None
-        message = reason or (
-            "cancelled by the user"
-            if cancelled
-            else f"the worker process died (exit code {worker.process.exitcode})"
-        )
+        if reason is not None:
+            message = reason
+        elif cancelled:
+            message = "cancelled by the user"
+        elif worker.done:  # it said it was done, yet the run is not finished: see its log
+            message = "the worker stopped without finishing the run (the server log says why)"
+        else:
+            message = f"the worker process died (exit code {worker.process.exitcode})"
         status = self._settle(run_id, "cancelled" if cancelled else "failed", message)
         with self._lock:
             self._workers.pop(run_id, None)
