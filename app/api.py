@@ -12,7 +12,6 @@ from fastapi import (
     Path,
     Query,
     Request,
-    Response,
     WebSocket,
     WebSocketDisconnect,
 )
@@ -116,18 +115,20 @@ def launch(body: RunRequest, request: Request) -> Run:
     return Run.of(record)
 
 
-@router.get("/runs", response_model=RunPage)
-async def list_runs(
+@router.get("/runs")
+def list_runs(
     request: Request,
     status: StatusName | None = None,
     scene: Annotated[str | None, Query(max_length=100)] = None,
     planner: PlannerName | None = None,
     limit: Annotated[int, Query(ge=1, le=500)] = 50,
     offset: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
-) -> Response:
-    """Newest first; answered from a cache while the database is unchanged."""
-    body = await _dash(request).runs_page(status, scene, planner, limit, offset)
-    return Response(body, media_type="application/json")
+) -> RunPage:
+    """Newest first (repeated reads are answered by :class:`app.pagecache.ReadCache`)."""
+    store = _dash(request).store
+    runs = store.list_runs(status=status, scene=scene, planner=planner, limit=limit, offset=offset)
+    total = store.count_runs(status=status, scene=scene, planner=planner)
+    return RunPage(runs=[Run.of(r) for r in runs], total=total, limit=limit, offset=offset)
 
 
 @router.get("/runs/{run_id}", responses={404: ERROR})

@@ -19,6 +19,7 @@ from starlette.routing import Match, Route
 
 from app import catalog
 from app.api import router
+from app.pagecache import ReadCache
 from app.security import Access, Guard, Refusal, refusal_response
 from app.services import Dashboard
 from app.settings import WILDCARD_HOSTS, Settings
@@ -81,6 +82,11 @@ def field_errors(errors: Any) -> list[dict[str, Any]]:
     return out
 
 
+def _store_version(app: FastAPI) -> int | None:
+    dashboard: Dashboard | None = getattr(app.state, "dashboard", None)
+    return None if dashboard is None else dashboard.store.data_version()
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
     access = Access.of(settings)
@@ -113,7 +119,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version="0.1.0",
         lifespan=lifespan,
     )
-    app.add_middleware(Guard, access=access, max_body_bytes=settings.max_body_bytes)
+    app.add_middleware(ReadCache, version=lambda: _store_version(app))
+    app.add_middleware(Guard, access=access, max_body_bytes=settings.max_body_bytes)  # outermost
 
     @app.exception_handler(RequestValidationError)
     async def bad_request(_request: Request, exc: RequestValidationError) -> JSONResponse:

@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-import asyncio
 import logging
-from collections import OrderedDict
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from fastapi.concurrency import run_in_threadpool
-
 from app import catalog
 from app.hub import EventDict, EventHub
 from app.manager import RunManager
-from app.schemas import Run, RunPage
 from app.settings import Settings
 from app.viewing import Viewer, ViewerService
 from planner.events import event_to_dict
@@ -34,60 +29,6 @@ class RequestError(ValueError):
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
         self.field = field
-
-
-PageKey = tuple[str | None, str | None, str | None, int, int]  # filters, limit, offset
-
-
-class RunPages:
-    """Pages of ``GET /api/runs``, serialised once per change of the database.
-
-    Listing runs is what every open page asks for every few seconds; under many concurrent
-    requests the query and the serialisation were the server's whole CPU. A page is kept
-    with the store's :meth:`~planner.store.RunStore.data_version` it was read at and served
-    again while that is unchanged (any commit by anyone, a ``tamp plan`` on the same file
-    included, changes it); concurrent misses of one page share one read. Used on the event
-    loop only. A database that cannot tell its version is read every time.
-    """
-
-    def __init__(self, store: RunStore, size: int = 64) -> None:
-        self.store = store
-        self.size = size
-        self._pages: OrderedDict[PageKey, tuple[int, bytes]] = OrderedDict()
-        self._reading: dict[tuple[PageKey, int], asyncio.Future[bytes]] = {}
-
-    async def get(self, key: PageKey) -> bytes:
-        version = self.store.data_version()
-        if version is None:
-            return await run_in_threadpool(self._read, key)
-        cached = self._pages.get(key)
-        if cached is not None and cached[0] == version:
-            self._pages.move_to_end(key)
-            return cached[1]
-        reading = self._reading.get((key, version))
-        if reading is None:
-            reading = asyncio.ensure_future(run_in_threadpool(self._read, key))
-            self._reading[(key, version)] = reading
-            reading.add_done_callback(lambda done: self._keep(key, version, done))
-        return await asyncio.shield(reading)
-
-    def _keep(self, key: PageKey, version: int, done: asyncio.Future[bytes]) -> None:
-        self._reading.pop((key, version), None)
-        if done.cancelled() or done.exception() is not None:
-            return
-        self._pages[key] = (version, done.result())
-        self._pages.move_to_end(key)
-        while len(self._pages) > self.size:
-            self._pages.popitem(last=False)
-
-    def _read(self, key: PageKey) -> bytes:
-        status, scene, planner, limit, offset = key
-        runs = self.store.list_runs(
-            status=status, scene=scene, planner=planner, limit=limit, offset=offset
-        )
-        total = self.store.count_runs(status=status, scene=scene, planner=planner)
-        page = RunPage(runs=[Run.of(r) for r in runs], total=total, limit=limit, offset=offset)
-        return page.model_dump_json().encode()
 
 
 class Dashboard:
@@ -115,7 +56,6 @@ class Dashboard:
         )
         self.viewer = ViewerService(viewer, self.store, self.hub)
         self.viewer_gate = viewer_gate
-        self.pages = RunPages(self.store)
         self.reports_dir = settings.reports_dir
 
     def close(self) -> None:
@@ -131,12 +71,6 @@ class Dashboard:
         if self.viewer_gate is None:
             return None
         return self.viewer_gate.url(host_header)
-
-    async def runs_page(
-        self, status: str | None, scene: str | None, planner: str | None, limit: int, offset: int
-    ) -> bytes:
-        """One page of ``GET /api/runs`` as JSON (:class:`RunPages`)."""
-        return await self.pages.get((status, scene, planner, limit, offset))
 
     # --- runs ---------------------------------------------------------------------------------
 
