@@ -23,7 +23,7 @@ from planner.events import (
     RunStarted,
     StreamQueried,
 )
-from planner.store import RunStore, StoreSink, default_db_path, process_token
+from planner.store import RunStore, StoreSink, default_db_path, is_alive, process_token
 
 CONFIG: dict[str, Any] = {"k": 10, "budget_s": 60.0, "policy": {"c": 1.4}}
 
@@ -563,3 +563,22 @@ def test_a_store_from_before_run_owners_opens_and_treats_its_live_runs_as_orphan
         assert store.get_run(old).status == "interrupted"
         assert store.get_run(new).status == "running"
         assert [r.id for r in store.list_runs()] == [new, old]
+
+
+def test_an_exited_owner_not_yet_reaped_counts_as_gone(store: RunStore) -> None:
+    """A worker whose server was killed is adopted by a process that may not reap it soon:
+    its zombie must not keep its run looking alive."""
+    process = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(0.5)"])
+    token = process_token(process.pid)
+    assert is_alive(token)
+    deadline = time.monotonic() + 30
+    stat = Path(f"/proc/{process.pid}/stat")
+    while stat.read_text().rpartition(")")[2].split()[0] != "Z":  # exited, not reaped
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    assert not is_alive(token)
+    run_id = store.create_run("line-2", 0, "baseline", {}, owner=token)
+    assert store.mark_interrupted() == 1 and store.get_run(run_id).status == "interrupted"
+    process.wait()
+    recycled = process_token().rsplit(":", 1)[0] + ":999"  # a live pid, another start time
+    assert is_alive(process_token()) and not is_alive(recycled)
