@@ -6,13 +6,23 @@ import json
 import logging
 from typing import Annotated, Any
 
-from fastapi import APIRouter, HTTPException, Query, Request, WebSocket, WebSocketDisconnect
+from fastapi import (
+    APIRouter,
+    HTTPException,
+    Path,
+    Query,
+    Request,
+    WebSocket,
+    WebSocketDisconnect,
+)
 from fastapi.concurrency import run_in_threadpool
 
 from app.hub import Ended, Lagged
 from app.manager import QueueFullError, RunNotLiveError
 from app.schemas import (
+    MAX_SEQ,
     DomainOut,
+    ErrorOut,
     EventPage,
     Health,
     ModelOut,
@@ -24,6 +34,7 @@ from app.schemas import (
     RunRequest,
     SceneOut,
     StatusName,
+    ValidationErrorOut,
     ViewerRequest,
     ViewerState,
 )
@@ -33,9 +44,19 @@ from planner.store import LIVE_STATUSES
 
 log = logging.getLogger(__name__)
 
-router = APIRouter(prefix="/api")
+ERROR = {"model": ErrorOut}
+router = APIRouter(
+    prefix="/api",
+    responses={
+        400: {**ERROR, "description": "the Host header names another server"},
+        401: {**ERROR, "description": "the server's token (TAMP_TOKEN) is missing or wrong"},
+        403: {**ERROR, "description": "a browser page of another origin"},
+        413: {**ERROR, "description": "the request body is larger than the server takes"},
+        422: {"model": ValidationErrorOut, "description": "a bad field, named"},
+    },
+)
 
-RunId = Annotated[str, "run id"]
+RunId = Annotated[str, Path(min_length=1, max_length=64, description="a run id")]
 WS_PAGE = 1000  # stored events read per page when a websocket catches up
 
 
@@ -62,8 +83,8 @@ def health(request: Request) -> Health:
         status="ok",
         running=running,
         queued=queued,
-        viewer_url=dash.viewer.url,
-        database=dash.store.engine.url.render_as_string(hide_password=True),
+        viewer_url=dash.viewer_url(request.headers.get("host")),
+        database=dash.store.backend,
     )
 
 
@@ -106,7 +127,7 @@ def reports(request: Request) -> list[Report]:
     return [Report(**r) for r in _dash(request).reports()]
 
 
-@router.post("/runs", status_code=202, responses={422: {}, 429: {}})
+@router.post("/runs", status_code=202, responses={429: {**ERROR, "description": "queue full"}})
 def launch(body: RunRequest, request: Request) -> Run:
     dash = _dash(request)
     try:
@@ -127,13 +148,14 @@ def list_runs(
     limit: Annotated[int, Query(ge=1, le=500)] = 50,
     offset: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
 ) -> RunPage:
+    """Newest first (repeated reads are answered by :class:`app.pagecache.ReadCache`)."""
     store = _dash(request).store
     runs = store.list_runs(status=status, scene=scene, planner=planner, limit=limit, offset=offset)
     total = store.count_runs(status=status, scene=scene, planner=planner)
     return RunPage(runs=[Run.of(r) for r in runs], total=total, limit=limit, offset=offset)
 
 
-@router.get("/runs/{run_id}", responses={404: {}})
+@router.get("/runs/{run_id}", responses={404: ERROR})
 def get_run(run_id: RunId, request: Request) -> RunDetail:
     dash = _dash(request)
     try:
@@ -141,9 +163,6 @@ def get_run(run_id: RunId, request: Request) -> RunDetail:
         last_seq = dash.store.last_seq(run_id)
     except KeyError as exc:
         raise _unknown_run(run_id) from exc
-    live = dash.hub.events(run_id, after=last_seq)
-    if live:
-        last_seq = live[-1]["seq"]
     return RunDetail(
         **Run.of(record).model_dump(),
         plan=record.plan,
@@ -152,11 +171,11 @@ def get_run(run_id: RunId, request: Request) -> RunDetail:
     )
 
 
-@router.get("/runs/{run_id}/events", responses={404: {}})
+@router.get("/runs/{run_id}/events", responses={404: ERROR})
 def get_events(
     run_id: RunId,
     request: Request,
-    after: Annotated[int, Query(ge=-1, le=2**31)] = -1,
+    after: Annotated[int, Query(ge=-1, le=MAX_SEQ)] = -1,
     limit: Annotated[int, Query(ge=1, le=5000)] = 1000,
 ) -> EventPage:
     try:
@@ -167,7 +186,11 @@ def get_events(
     return EventPage(events=events, next_after=next_after, done=done)
 
 
-@router.delete("/runs/{run_id}", status_code=202, responses={404: {}, 409: {}})
+@router.delete(
+    "/runs/{run_id}",
+    status_code=202,
+    responses={404: ERROR, 409: {**ERROR, "description": "the run is already over"}},
+)
 def cancel_run(run_id: RunId, request: Request) -> Run:
     dash = _dash(request)
     try:
@@ -179,19 +202,26 @@ def cancel_run(run_id: RunId, request: Request) -> Run:
         raise HTTPException(409, detail=str(exc)) from exc
 
 
-@router.put("/viewer", responses={404: {}})
+@router.put("/viewer", responses={404: ERROR})
 def follow(body: ViewerRequest, request: Request) -> ViewerState:
     dash = _dash(request)
     try:
         dash.viewer.follow(body.run_id, body.step)
     except KeyError as exc:
         raise _unknown_run(body.run_id) from exc
-    return ViewerState(url=dash.viewer.url, run_id=body.run_id, step=body.step)
+    url = dash.viewer_url(request.headers.get("host"))
+    return ViewerState(url=url, run_id=body.run_id, step=body.step)
 
 
 @router.websocket("/runs/{run_id}/stream")
-async def stream(websocket: WebSocket, run_id: str, after: int = -1) -> None:
-    """Stored events with ``seq > after``, then live ones (docs/dashboard.md)."""
+async def stream(
+    websocket: WebSocket,
+    run_id: Annotated[str, Path(min_length=1, max_length=64)],
+    after: Annotated[int, Query(ge=-1, le=MAX_SEQ)] = -1,
+) -> None:
+    """Stored events with ``seq > after``, then live ones (docs/dashboard.md). Everything
+    sent is in the store: stored events first, then the hub's batches, which workers send
+    only once they are committed."""
     dash: Dashboard = websocket.app.state.dashboard
     await websocket.accept()
     try:

@@ -4,8 +4,10 @@ The run manager's reader thread :meth:`EventHub.publish`\\ es batches of event d
 websocket client holds a :class:`Subscription` whose asyncio queue is bounded in events. A client
 that falls further behind than that is marked lagged: its queue is emptied and it is told to
 resynchronise from the store, so a slow or vanished client never holds the planner or the other
-clients back. The hub keeps every event of a live run until the run ends (by then the store
-holds them all).
+clients back. Only stored events reach the hub: a worker sends a batch once the store has
+committed it, and the run manager publishes the closing events it writes after writing them, so
+nothing a client is sent can be lost by a crash. The hub keeps every event of a live run until
+the run ends.
 """
 
 from __future__ import annotations

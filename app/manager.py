@@ -2,12 +2,14 @@
 queued in order.
 
 Planning is CPU-bound, so each run gets its own (spawned) process and the server stays
-responsive. A worker records its run in the store itself and sends its events through a pipe;
-one reader thread here receives them and hands them to the :class:`~app.hub.EventHub`. A worker
-that dies without saying it is done (killed, crashed) has its run finished here: the events the
-server received but the store lacks are written, a closing event is added, and the run is marked
-failed (or cancelled, when the user asked). Cancelling asks the worker to stop (the search checks
-between iterations) and kills it after ``cancel_grace_s``.
+responsive. A worker records its run in the store itself and sends each batch of events through
+a pipe once it is stored; one reader thread here receives them and hands them to the
+:class:`~app.hub.EventHub`. A worker that dies without saying it is done (killed, crashed) has
+its run finished here (:meth:`~planner.store.RunStore.settle_run`: a closing event it stored
+decides, else the run is failed, or cancelled when the user asked, with a closing event).
+Cancelling asks the worker to stop (the search checks between iterations) and kills it after
+``cancel_grace_s``. Every ``sweep_s`` the reader also finishes runs of other processes that
+died (an earlier server's workers, a killed ``tamp plan``).
 """
 
 from __future__ import annotations
@@ -25,9 +27,9 @@ from typing import Any
 
 from app import worker as worker_module
 from app.hub import EventHub
-from planner.events import RunCancelled, RunFailed, event_from_dict, event_to_dict
+from planner.events import event_to_dict
 from planner.runs import RunConfig
-from planner.store import LIVE_STATUSES, RunStore
+from planner.store import RunStore
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +51,7 @@ class _Worker:
     started: float = field(default_factory=time.monotonic)
     cancel_at: float | None = None  # monotonic time the user asked to cancel
     done: bool = False  # the worker said it finished
+    ending: bool = False  # its run is being finished here
 
 
 class RunManager:
@@ -61,6 +64,7 @@ class RunManager:
         max_running: int = 1,
         max_queued: int = 20,
         cancel_grace_s: float = 10.0,
+        sweep_s: float = 2.0,
     ) -> None:
         self.store = store
         self.database = database
@@ -68,6 +72,8 @@ class RunManager:
         self.max_running = max_running
         self.max_queued = max_queued
         self.cancel_grace_s = cancel_grace_s
+        self.sweep_s = sweep_s
+        self._swept = time.monotonic()
         self._ctx = multiprocessing.get_context("spawn")
         self._lock = threading.RLock()
         self._pending: deque[tuple[str, RunConfig]] = deque()
@@ -112,10 +118,7 @@ class RunManager:
             for i, (queued_id, _) in enumerate(self._pending):
                 if queued_id == run_id:
                     del self._pending[i]
-                    self.store.finish_run(
-                        run_id, "cancelled", message="cancelled before it started"
-                    )
-                    self.hub.end(run_id, "cancelled")
+                    self._settle(run_id, "cancelled", "cancelled before it started")
                     return
             worker = self._workers.get(run_id)
             if worker is None:
@@ -132,8 +135,7 @@ class RunManager:
             self._closing = True
             while self._pending:
                 run_id, _ = self._pending.popleft()
-                self.store.finish_run(run_id, "cancelled", message="the server shut down")
-                self.hub.end(run_id, "cancelled")
+                self._settle(run_id, "cancelled", "the server shut down before it started")
             for worker in self._workers.values():
                 worker.stop.set()
                 if worker.cancel_at is None:
@@ -174,9 +176,10 @@ class RunManager:
             with self._lock:
                 if self._closing and not self._workers:
                     return
-                conns = {w.conn: w for w in self._workers.values()}
+                conns = {w.conn: w for w in self._workers.values() if not w.ending}
             if not conns:
                 time.sleep(0.05)
+                self._sweep()
                 continue
             for conn in wait(list(conns), timeout=0.2):
                 worker = conns[conn]  # type: ignore[index]
@@ -193,6 +196,25 @@ class RunManager:
                 elif kind == "done":
                     worker.done = True
             self._check_cancels()
+            self._sweep()
+
+    def _sweep(self) -> None:
+        """Finish the runs of other processes that died (never one of this server's)."""
+        now = time.monotonic()
+        if now - self._swept < self.sweep_s:
+            return
+        self._swept = now
+        with self._lock:
+            if self._closing:
+                return
+            mine = set(self._workers) | {run_id for run_id, _ in self._pending}
+        try:
+            settled = self.store.mark_interrupted(skip=mine)
+        except Exception:
+            log.exception("could not check for runs whose process died")
+            return
+        if settled:
+            log.warning("%d run(s) whose process died are now finished", settled)
 
     def _check_cancels(self) -> None:
         now = time.monotonic()
@@ -218,47 +240,39 @@ class RunManager:
 
     def _ended(self, worker: _Worker, *, reason: str | None = None) -> None:
         with self._lock:
-            if self._workers.pop(worker.run_id, None) is None:
+            if worker.ending or worker.run_id not in self._workers:
                 return
+            worker.ending = True  # stays in _workers until its run is finished: _sweep skips it
         worker.process.join(timeout=5.0)
         worker.conn.close()
         run_id = worker.run_id
+        cancelled = worker.cancel_at is not None
+        if reason is not None:
+            message = reason
+        elif cancelled:
+            message = "cancelled by the user"
+        elif worker.done:  # it said it was done, yet the run is not finished: see its log
+            message = "the worker stopped without finishing the run (the server log says why)"
+        else:
+            message = f"the worker process died (exit code {worker.process.exitcode})"
+        status = self._settle(run_id, "cancelled" if cancelled else "failed", message)
+        with self._lock:
+            self._workers.pop(run_id, None)
+        log.info("run %s ended: %s", run_id, status)
+        self._dispatch()
+
+    def _settle(self, run_id: str, status: str, message: str) -> str:
+        """Finish a run its worker did not (a closing event it stored decides), send the
+        clients what they have not had, and end it in the hub; returns its final status."""
         try:
-            record = self.store.get_run(run_id)
-            status = record.status
-            if status in LIVE_STATUSES:  # the worker died before finishing its run
-                cancelled = worker.cancel_at is not None
-                status = "cancelled" if cancelled else "failed"
-                message = reason or (
-                    "cancelled by the user"
-                    if cancelled
-                    else f"the worker process died (exit code {worker.process.exitcode})"
-                )
-                self._save_missing_events(run_id, status, message)
-                self.store.finish_run(run_id, status, message=message)
+            if self.store.settle_run(run_id, status, message) is None:
+                log.debug("run %s was finished by its worker", run_id)
+            status = self.store.get_run(run_id).status
+            seen = self.hub.events(run_id) or []
+            stored = self.store.events(run_id, after=seen[-1]["seq"] if seen else -1)
+            self.hub.publish(run_id, [event_to_dict(e) for e in stored])
         except Exception:
             log.exception("run %s: could not record how it ended", run_id)
             status = "failed"
         self.hub.end(run_id, status)
-        log.info("run %s ended: %s", run_id, status)
-        self._dispatch()
-
-    def _save_missing_events(self, run_id: str, status: str, message: str) -> None:
-        """Write what the server received but the store lacks, then a closing event."""
-        stored = self.store.last_seq(run_id)
-        missing = [event_from_dict(e) for e in self.hub.events(run_id, after=stored) or []]
-        if missing:
-            self.store.write_events(run_id, missing)
-        if not missing and stored >= 0:
-            missing_or_last = self.store.events(run_id, after=stored - 1)
-        else:
-            missing_or_last = missing
-        seq = stored + len(missing) + 1
-        t = missing_or_last[-1].t if missing_or_last else 0.0
-        closing = (
-            RunCancelled(run_id=run_id, seq=seq, t=t, reason=message)
-            if status == "cancelled"
-            else RunFailed(run_id=run_id, seq=seq, t=t, error=message)
-        )
-        self.store.write_events(run_id, [closing])
-        self.hub.publish(run_id, [event_to_dict(closing)])
+        return status

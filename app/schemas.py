@@ -3,30 +3,63 @@
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
+from app.catalog import NAME
 from planner.store import RunRecord
 
 PlannerName = Literal["baseline", "paper", "learned", "sequential"]
 StatusName = Literal["queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted"]
 
+MAX_SEQ = 2**31 - 1  # event numbers and steps: far more than any run has
+
+# Request bodies: no unknown fields, no coercion ("0" is not a number, true is not 1), finite
+# numbers only, so the OpenAPI schema says exactly what the server accepts.
+REQUEST = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+
+def _integral(value: Any) -> Any:
+    """JSON's integers: 461 and 461.0 (JSON Schema counts both), never "461" nor true."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    return value
+
+
+Integer = Annotated[int, BeforeValidator(_integral)]  # "integer" exactly as JSON Schema means it
+
+SceneName = Annotated[
+    str,
+    Field(
+        pattern=NAME.pattern,
+        description="a scene name offered by GET /api/scenes: a letter or digit, then up to 99 "
+        "letters, digits, '_', '.' or '-' (no paths); another name is a 422 listing the scenes",
+        examples=["line-2", "kitchen-1"],
+    ),
+]
+ModelName = Annotated[
+    str,
+    Field(
+        pattern=NAME.pattern,
+        description="learned only: a model name offered by GET /api/models (same characters "
+        "as a scene name); another name is a 422 listing the models",
+    ),
+]
+
 
 class RunRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-    scene: str = Field(min_length=1, max_length=100, description="a scene name (GET /api/scenes)")
-    planner: PlannerName = "baseline"
-    seed: int = Field(0, ge=0, le=2**31 - 1)
-    budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
-    model: str | None = Field(
-        None,
-        min_length=1,
-        max_length=100,
-        description="learned only: a model name (GET /api/models)",
+    model_config = ConfigDict(
+        **REQUEST,
+        json_schema_extra={"examples": [{"scene": "line-2", "k": 2, "budget_s": 10}]},
     )
-    k: int = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
+
+    scene: SceneName
+    planner: PlannerName = "baseline"
+    seed: Integer = Field(0, ge=0, le=2**31 - 1)
+    budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
+    model: ModelName | None = None
+    k: Integer = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
 
 
 class Run(BaseModel):
@@ -117,14 +150,16 @@ class Health(BaseModel):
     running: int
     queued: int
     viewer_url: str | None
-    database: str
+    database: str = Field(description="the kind of database (sqlite, postgresql), not where")
 
 
 class ViewerRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = REQUEST
 
     run_id: str = Field(min_length=1, max_length=64)
-    step: int | None = Field(None, ge=0, description="show events 0..step; null: all, live")
+    step: Annotated[int, Field(ge=0, le=MAX_SEQ), BeforeValidator(_integral)] | None = Field(
+        None, description="show events 0..step; null: all, live"
+    )
 
 
 class ViewerState(BaseModel):
@@ -136,3 +171,23 @@ class ViewerState(BaseModel):
 class Report(BaseModel):
     name: str
     url: str
+
+
+class ErrorOut(BaseModel):
+    """Any error but a bad field: unknown run (404), already over (409), full queue (429),
+    foreign Host (400), missing token (401), foreign origin (403), body too large (413)."""
+
+    detail: str
+
+
+class FieldError(BaseModel):
+    loc: list[str | int] = Field(description="where: body / query / path, then the field")
+    msg: str
+    type: str
+    input: Any = Field(None, description="the start of the value given, when it is short")
+
+
+class ValidationErrorOut(BaseModel):
+    """A 422: one entry per bad field (the first 20)."""
+
+    detail: list[FieldError]

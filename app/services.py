@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from app import catalog
 from app.hub import EventDict, EventHub
@@ -16,6 +16,9 @@ from planner.events import event_to_dict
 from planner.planners import get_planner
 from planner.runs import RunConfig
 from planner.store import LIVE_STATUSES, RunRecord, RunStore
+
+if TYPE_CHECKING:
+    from app.viewgate import ViewerGate
 
 log = logging.getLogger(__name__)
 
@@ -30,14 +33,18 @@ class RequestError(ValueError):
 
 
 class Dashboard:
-    def __init__(self, settings: Settings, *, viewer: Viewer | None = None) -> None:
+    def __init__(
+        self,
+        settings: Settings,
+        *,
+        viewer: Viewer | None = None,
+        viewer_gate: ViewerGate | None = None,
+    ) -> None:
         self.settings = settings
         self.store = RunStore(settings.database_url)
-        interrupted = self.store.mark_interrupted()
-        if interrupted:
-            log.warning(
-                "%d run(s) left unfinished by an earlier server are now 'interrupted'", interrupted
-            )
+        settled = self.store.mark_interrupted()
+        if settled:
+            log.warning("%d run(s) whose process had stopped are now finished", settled)
         self.hub = EventHub(client_limit=settings.ws_queue_events)
         self.domains = catalog.Domains(settings.extra_domains)
         self.models = catalog.Models(settings.model_dir, self.domains)
@@ -50,12 +57,22 @@ class Dashboard:
             cancel_grace_s=settings.cancel_grace_s,
         )
         self.viewer = ViewerService(viewer, self.store, self.hub)
+        self.viewer_gate = viewer_gate
         self.reports_dir = settings.reports_dir
 
     def close(self) -> None:
         self.manager.close()
+        if self.viewer_gate is not None:
+            self.viewer_gate.close()
         self.viewer.close()
         self.store.close()
+
+    def viewer_url(self, host_header: str | None) -> str | None:
+        """The 3D view's address for a page that reached the dashboard as ``host_header``
+        (the same name, so the token cookie and the framing rule apply); None without one."""
+        if self.viewer_gate is None:
+            return None
+        return self.viewer_gate.url(host_header)
 
     # --- runs ---------------------------------------------------------------------------------
 
@@ -112,13 +129,10 @@ class Dashboard:
         return counts
 
     def events(self, run_id: str, after: int, limit: int) -> tuple[list[EventDict], bool]:
-        """Events with ``seq > after`` (stored, then those still on their way) and whether the
-        run is over with nothing after them."""
+        """Stored events with ``seq > after`` (only stored ones are ever served) and whether
+        the run is over with nothing after them."""
         record = self.store.get_run(run_id)  # KeyError for an unknown run
         events = [event_to_dict(e) for e in self.store.events(run_id, after=after, limit=limit)]
-        if len(events) < limit:
-            last = events[-1]["seq"] if events else after
-            events += (self.hub.events(run_id, after=last) or [])[: limit - len(events)]
         done = record.status not in LIVE_STATUSES and len(events) < limit
         return events, done
 

@@ -1,43 +1,70 @@
-"""What runs in a run's worker process: one recorded run, its events sent to the server.
+"""What runs in a run's worker process: one recorded run, its stored events sent to the server.
 
-The worker writes its events to the store itself (:func:`planner.runs.record_run`) and sends
-them, in small batches, through a pipe to the server, which fans them out to websocket clients
-and the 3D view. Its last message is ``("done", run_id, None)``, sent after the store holds
-every event; a worker that dies without it is handled by the run manager.
+The worker takes the run over in the store (:meth:`~planner.store.RunStore.claim_run`), records
+it (:func:`planner.runs.record_run`) and, each time a batch of events has been committed,
+sends that batch through a pipe to the server, which fans it out to websocket clients and the
+3D view. So the server only ever serves events the store holds: a crash can lose only events
+no client has seen. Its last message is ``("done", run_id, None)``, sent after the run is
+finished in the store; a worker that dies without it is handled by the run manager.
+
+A worker never outlives its server: a thread waits on the parent process's sentinel and ends
+the process at once when the server goes away (killed, crashed). The run is then finished by
+the next server that opens the store (:meth:`~planner.store.RunStore.mark_interrupted`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import multiprocessing
+import os
 import threading
-from multiprocessing.connection import Connection
+from multiprocessing.connection import Connection, wait
 from multiprocessing.synchronize import Event as MpEvent
 from typing import Any
 
-from planner.events import BatchingSink, Event, event_to_dict
+from planner.events import Event, event_to_dict
 
 log = logging.getLogger(__name__)
 
+ORPHAN_EXIT_CODE = 3  # the exit code of a worker whose server went away
 
-class PipeSink(BatchingSink):
-    """Sends batches of event dicts through a pipe (every 0.1 s at the latest)."""
 
-    def __init__(self, run_id: str, conn: Connection, lock: threading.Lock) -> None:
-        self.run_id = run_id
+def exit_with_parent(run_id: str) -> threading.Thread | None:
+    """End this process as soon as its parent (the server) is gone; None without a parent."""
+    parent = multiprocessing.parent_process()
+    if parent is None:
+        return None
+    sentinel = parent.sentinel
+
+    def watch() -> None:
+        wait([sentinel])
+        log.warning("run %s: the server is gone; the worker stops", run_id)
+        os._exit(ORPHAN_EXIT_CODE)
+
+    thread = threading.Thread(target=watch, name="watch-server", daemon=True)
+    thread.start()
+    return thread
+
+
+class _Pipe:
+    """The server's end of the conversation; a gone server is not this run's error."""
+
+    def __init__(self, conn: Connection) -> None:
         self.conn = conn
-        self.lock = lock
-        super().__init__(
-            self._send, name=f"pipe-sink-{run_id[:8]}", batch_size=100, flush_interval_s=0.1
-        )
+        self.lock = threading.Lock()
 
-    def __repr__(self) -> str:
-        return f"PipeSink(run_id={self.run_id!r})"
-
-    def _send(self, batch: list[Event]) -> None:
-        message = ("events", self.run_id, [event_to_dict(e) for e in batch])
-        with self.lock:
+    def send(self, message: tuple[str, str, Any]) -> None:
+        with self.lock, contextlib.suppress(OSError):
             self.conn.send(message)
+
+    def stored(self, run_id: str, events: list[Event]) -> None:
+        """A write listener of the store: the batch is committed, the server may serve it."""
+        self.send(("events", run_id, [event_to_dict(e) for e in events]))
+
+    def close(self) -> None:
+        with self.lock:
+            self.conn.close()
 
 
 def main(
@@ -47,24 +74,25 @@ def main(
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s worker %(name)s: %(message)s"
     )
+    exit_with_parent(run_id)
     from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
 
-    lock = threading.Lock()
+    pipe = _Pipe(conn)
     store = RunStore(database)
-    sink = PipeSink(run_id, conn, lock)
+    store.add_write_listener(pipe.stored)
     try:
+        if not store.claim_run(run_id):
+            log.warning("run %s is no longer running; not started", run_id)
+            return
         run_config = RunConfig(**config)
         preload_libraries(run_config)
-        record_run(run_config, store, run_id, sinks=(sink,), should_stop=stop.is_set)
+        record_run(run_config, store, run_id, should_stop=stop.is_set)
     except KeyboardInterrupt:
         log.warning("run %s interrupted", run_id)
     except Exception:
         log.exception("run %s failed", run_id)  # already finished as failed in the store
     finally:
-        sink.close()
         store.close()
-        with lock:
-            with contextlib.suppress(OSError):
-                conn.send(("done", run_id, None))
-            conn.close()
+        pipe.send(("done", run_id, None))
+        pipe.close()

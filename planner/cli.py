@@ -259,6 +259,11 @@ def build_parser() -> argparse.ArgumentParser:
         "environment variables (docs/dashboard.md).",
     )
     se.add_argument("--host", help="address to bind (default 127.0.0.1: this machine only)")
+    se.add_argument(
+        "--allow-remote",
+        action="store_true",
+        help="let a --host beyond this machine serve without a token (TAMP_TOKEN)",
+    )
     se.add_argument("--port", type=int, help="port of the page and API (default 8000)")
     se.add_argument("--db", help="run store: SQLite path or SQLAlchemy URL (default: tamp plan's)")
     se.add_argument("--viewer-port", type=int, help="port of the 3D view (default 8080)")
@@ -703,6 +708,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         "model_dir": args.models,
         "reports_dir": args.reports,
         "extra_domains": args.domain,
+        "allow_remote": True if args.allow_remote else None,
     }
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})

@@ -3,6 +3,7 @@
 from planner.store.db import (
     FINAL_STATUSES,
     LIVE_STATUSES,
+    MAX_INT,
     RUN_STATUSES,
     BenchRecord,
     BenchTrialRecord,
@@ -13,10 +14,12 @@ from planner.store.db import (
     StoreSink,
     default_db_path,
 )
+from planner.store.owner import is_alive, process_token
 
 __all__ = [
     "FINAL_STATUSES",
     "LIVE_STATUSES",
+    "MAX_INT",
     "RUN_STATUSES",
     "BenchRecord",
     "BenchTrialRecord",
@@ -26,4 +29,6 @@ __all__ = [
     "RunStore",
     "StoreSink",
     "default_db_path",
+    "is_alive",
+    "process_token",
 ]

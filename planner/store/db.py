@@ -11,8 +11,11 @@ from __future__ import annotations
 import json
 import logging
 import os
+import sqlite3
+import threading
 import time
 import uuid
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -43,18 +46,27 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 from sqlalchemy.pool import StaticPool
 
 from planner.events import (
+    TERMINAL_TYPES,
     BatchingSink,
     Event,
+    RunCancelled,
+    RunFailed,
+    RunFinished,
     StreamQueried,
     event_from_dict,
     event_payload,
 )
+from planner.store.owner import is_alive, process_token
 
 log = logging.getLogger(__name__)
 
 RUN_STATUSES = ("queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted")
 FINAL_STATUSES = RUN_STATUSES[2:]  # what finish_run accepts
 LIVE_STATUSES = RUN_STATUSES[:2]  # not finished yet
+MAX_INT = 2**63 - 1  # SQLite's largest integer: bigger numbers never reach a query
+INTERRUPTED = "the process running it stopped before it finished"
+
+WriteListener = Callable[[str, list[Event]], None]
 
 
 _dumps = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
@@ -74,6 +86,7 @@ class Base(DeclarativeBase):
 
 class RunRow(Base):
     __tablename__ = "runs"
+    __table_args__ = (Index("ix_runs_created_at", "created_at"),)  # runs listed newest first
 
     id: Mapped[str] = mapped_column(String(32), primary_key=True)  # uuid4 hex
     scene: Mapped[str] = mapped_column(Text)  # a scene name or a path to a scene file
@@ -89,6 +102,7 @@ class RunRow(Base):
     queries: Mapped[int] = mapped_column(default=0)
     message: Mapped[str] = mapped_column(Text, default="")
     plan: Mapped[str | None] = mapped_column(Text)  # JSON of the bound plan file when solved
+    owner: Mapped[str | None] = mapped_column(Text)  # host:pid:start of the process running it
 
 
 class EventRow(Base):
@@ -330,7 +344,9 @@ def _create_tables(engine: Engine, attempts: int = 10) -> None:
 
 # Columns added after stores were first written, as (table, column, SQL type): a store from an
 # older version gets them (NULL in its old rows) when it is opened.
-_ADDED_COLUMNS = (("stream_queries", "reason", "TEXT"),)
+_ADDED_COLUMNS = (("stream_queries", "reason", "TEXT"), ("runs", "owner", "TEXT"))
+# Indices added the same way (CREATE INDEX IF NOT EXISTS), as (name, table, columns).
+_ADDED_INDICES = (("ix_runs_created_at", "runs", "created_at"),)
 
 
 def _add_new_columns(engine: Engine, attempts: int = 10) -> None:
@@ -354,6 +370,16 @@ def _add_new_columns(engine: Engine, attempts: int = 10) -> None:
                     "run store: adding %s.%s raced another process; checking again", table, column
                 )
                 time.sleep(0.05 * (attempt + 1))
+    for name, table, columns in _ADDED_INDICES:
+        with engine.begin() as conn:
+            conn.execute(text(f"CREATE INDEX IF NOT EXISTS {name} ON {table} ({columns})"))
+
+
+def _bounded(name: str, value: int, low: int = 0) -> int:
+    """``value`` if it is an integer SQLite can hold and at least ``low``; else ValueError."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= MAX_INT:
+        raise ValueError(f"{name} must be an integer from {low} to {MAX_INT}, got {value!r}")
+    return value
 
 
 class RunStore:
@@ -367,6 +393,9 @@ class RunStore:
         self.engine = _engine_for(url_or_path)
         _create_tables(self.engine)
         _add_new_columns(self.engine)
+        self._write_listeners: list[WriteListener] = []
+        self._version_lock = threading.Lock()
+        self._version_conn: sqlite3.Connection | None = None
         log.debug("run store at %s", self.engine.url.render_as_string(hide_password=True))
 
     def __enter__(self) -> RunStore:
@@ -376,7 +405,34 @@ class RunStore:
         self.close()
 
     def close(self) -> None:
+        with self._version_lock:
+            if self._version_conn is not None:
+                self._version_conn.close()
+                self._version_conn = None
         self.engine.dispose()
+
+    @property
+    def backend(self) -> str:
+        """The kind of database (``sqlite``, ``postgresql``, ...), without where it is."""
+        return self.engine.url.get_backend_name()
+
+    def add_write_listener(self, listener: WriteListener) -> None:
+        """``listener(run_id, events)`` is called after each :meth:`write_events` has committed,
+        in the writing thread, so whoever it tells can rely on the events being stored. Its
+        errors are logged, never raised: the events are stored either way."""
+        self._write_listeners.append(listener)
+
+    def data_version(self) -> int | None:
+        """A number that changes whenever anyone commits to the database, for caching what
+        was read from it; None when the database cannot say (not a SQLite file)."""
+        database = self.engine.url.database
+        if self.backend != "sqlite" or database in (None, "", ":memory:"):
+            return None
+        with self._version_lock:
+            if self._version_conn is None:  # never writes, so every commit is another's
+                self._version_conn = sqlite3.connect(database, check_same_thread=False)
+            row = self._version_conn.execute("PRAGMA data_version").fetchone()
+        return int(row[0])
 
     # runs
 
@@ -388,8 +444,11 @@ class RunStore:
         config: dict[str, Any],
         *,
         status: str = "running",
+        owner: str | None = None,
     ) -> str:
-        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id."""
+        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id.
+        ``owner`` (default: this process, :func:`~planner.store.owner.process_token`) is the
+        process that will finish it; :meth:`claim_run` hands it to another."""
         if status not in LIVE_STATUSES:
             raise ValueError(f"a new run is queued or running, not {status!r}")
         try:
@@ -409,6 +468,7 @@ class RunStore:
                     created_at=datetime.now(UTC),
                     queries=0,
                     message="",
+                    owner=owner or process_token(),
                 )
             )
         log.debug("created run %s (%s, seed %d, %s)", run_id, scene, seed, planner)
@@ -423,6 +483,17 @@ class RunStore:
             if current != "queued":
                 raise ValueError(f"run {run_id} is {current!r}, not queued")
             conn.execute(update(RunRow).where(RunRow.id == run_id).values(status="running"))
+
+    def claim_run(self, run_id: str) -> bool:
+        """This process now runs ``run_id`` (a worker takes over the run its server started);
+        False, and nothing changes, when the run is no longer ``running``."""
+        with self.engine.begin() as conn:
+            result = conn.execute(
+                update(RunRow)
+                .where(RunRow.id == run_id, RunRow.status == "running")
+                .values(owner=process_token())
+            )
+        return bool(result.rowcount)
 
     def count_runs(
         self, *, status: str | None = None, scene: str | None = None, planner: str | None = None
@@ -499,8 +570,8 @@ class RunStore:
         """Runs newest first, optionally filtered."""
         if status is not None and status not in RUN_STATUSES:
             raise ValueError(f"unknown status {status!r} (known: {', '.join(RUN_STATUSES)})")
-        if limit < 0 or offset < 0:
-            raise ValueError("limit and offset must be >= 0")
+        _bounded("limit", limit)
+        _bounded("offset", offset)
         query = select(RunRow)
         if status is not None:
             query = query.where(RunRow.status == status)
@@ -512,36 +583,82 @@ class RunStore:
         with Session(self.engine) as session:
             return [RunRecord.from_row(r) for r in session.scalars(query)]
 
-    def mark_interrupted(self) -> int:
-        """Runs still ``running`` (their process died) become ``interrupted``; returns how many.
-        Call it when the server starts, before any run is launched."""
-        with self.engine.begin() as conn:
-            result = conn.execute(
-                update(RunRow)
-                .where(RunRow.status.in_(LIVE_STATUSES))
-                .values(
-                    status="interrupted",
-                    finished_at=datetime.now(UTC),
-                    message="the process running it stopped before it finished",
-                )
+    def mark_interrupted(self, message: str = INTERRUPTED, *, skip: Collection[str] = ()) -> int:
+        """Finish the live runs whose process is gone (:meth:`settle_run`: a closing event
+        the process stored decides how it ended, else it is ``interrupted`` with a closing
+        event added); returns how many. Runs of processes still running (a ``tamp plan`` on
+        the same database, another server's workers) are left alone. A server calls it when
+        it starts, and now and then while it runs (``skip``: the runs it is finishing itself)."""
+        with self.engine.connect() as conn:
+            live = conn.execute(
+                select(RunRow.id, RunRow.owner).where(RunRow.status.in_(LIVE_STATUSES))
+            ).all()
+        settled = 0
+        for run_id, owner in live:
+            if run_id in skip or is_alive(owner):
+                continue
+            record = self.settle_run(run_id, "interrupted", message)
+            if record is not None:
+                settled += 1
+                log.info("run %s: its process is gone; now %s", run_id, record.status)
+        return settled
+
+    def settle_run(self, run_id: str, status: str, message: str) -> RunRecord | None:
+        """Finish a live run that its own process will not finish (cancelled while queued,
+        its process died or was stopped): in one transaction, the run's stored closing event
+        decides how it ended (a ``run_finished`` the process wrote before it died wins, with
+        its figures), else ``status`` and ``message`` are recorded with a closing event after
+        the last stored one (``run_cancelled`` for ``cancelled``, ``run_failed`` otherwise).
+        None when the run had already finished; KeyError for an unknown run."""
+        if status not in FINAL_STATUSES:
+            raise ValueError(
+                f"unknown final status {status!r} (known: {', '.join(FINAL_STATUSES)})"
             )
-        if result.rowcount:
-            log.info("marked %d unfinished run(s) interrupted", result.rowcount)
-        return result.rowcount
+        now = datetime.now(UTC)
+        with self.engine.begin() as conn:
+            claimed = conn.execute(  # takes the write lock first: nobody settles it twice
+                update(RunRow)
+                .where(RunRow.id == run_id, RunRow.status.in_(LIVE_STATUSES))
+                .values(finished_at=now)
+            )
+            if not claimed.rowcount:
+                self._require(conn, run_id)
+                return None
+            last = conn.execute(
+                select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
+                .where(EventRow.run_id == run_id)
+                .order_by(EventRow.seq.desc())
+                .limit(1)
+            ).first()
+            values: dict[str, Any] = {"status": status, "message": message}
+            last_seq, last_t, last_type, last_payload = last or (-1, 0.0, "", "{}")
+            if last_type in TERMINAL_TYPES:
+                data = json.loads(last_payload)
+                data.update(type=last_type, run_id=run_id, seq=last_seq, t=last_t)
+                values = _ending(event_from_dict(data))
+            else:
+                seq, t = last_seq + 1, last_t
+                closing: Event = (
+                    RunCancelled(run_id=run_id, seq=seq, t=t, reason=message)
+                    if status == "cancelled"
+                    else RunFailed(run_id=run_id, seq=seq, t=t, error=message)
+                )
+                conn.execute(insert(EventRow), [_event_row(closing)])
+            conn.execute(update(RunRow).where(RunRow.id == run_id).values(**values))
+        return self.get_run(run_id)
 
     # events and queries
 
     def events(self, run_id: str, *, after: int = -1, limit: int | None = None) -> list[Event]:
         """The run's events with ``seq > after`` in order, at most ``limit`` of them."""
+        _bounded("after", after, low=-1)
         query = (
             select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
             .where(EventRow.run_id == run_id, EventRow.seq > after)
             .order_by(EventRow.seq)
         )
         if limit is not None:
-            if limit < 0:
-                raise ValueError(f"limit must be >= 0, got {limit}")
-            query = query.limit(limit)
+            query = query.limit(_bounded("limit", limit))
         with self.engine.connect() as conn:
             self._require(conn, run_id)
             rows = conn.execute(query).all()
@@ -688,16 +805,7 @@ class RunStore:
         for e in events:
             if e.run_id != run_id:
                 raise ValueError(f"event {e.type} #{e.seq} belongs to run {e.run_id}, not {run_id}")
-            payload = event_payload(e)
-            event_rows.append(
-                {
-                    "run_id": run_id,
-                    "seq": e.seq,
-                    "t": e.t,
-                    "type": e.type,
-                    "payload": _dumps(payload),
-                }
-            )
+            event_rows.append(_event_row(e))
             if isinstance(e, StreamQueried) and e.reused_from is None:
                 query_rows.append(
                     {
@@ -720,6 +828,11 @@ class RunStore:
             conn.execute(insert(EventRow), event_rows)
             if query_rows:
                 conn.execute(insert(QueryRow), query_rows)
+        for listener in self._write_listeners:
+            try:
+                listener(run_id, events)
+            except Exception:
+                log.exception("run store: write listener %r failed", listener)
 
     @staticmethod
     def _require(conn: Connection, run_id: str) -> None:
@@ -729,6 +842,33 @@ class RunStore:
 
 def _unknown(run_id: str) -> KeyError:
     return KeyError(f"unknown run id {run_id!r}")
+
+
+def _event_row(event: Event) -> dict[str, Any]:
+    return {
+        "run_id": event.run_id,
+        "seq": event.seq,
+        "t": event.t,
+        "type": event.type,
+        "payload": _dumps(event_payload(event)),
+    }
+
+
+def _ending(event: Event) -> dict[str, Any]:
+    """The run row's fields as a stored closing event tells how the run ended."""
+    if isinstance(event, RunFinished):
+        return {
+            "status": event.status,
+            "planning_s": event.planning_s,
+            "execution_s": event.execution_s,
+            "oracle_s": event.oracle_s,
+            "queries": event.queries,
+            "message": event.message,
+        }
+    if isinstance(event, RunCancelled):
+        return {"status": "cancelled", "message": event.reason}
+    assert isinstance(event, RunFailed), event
+    return {"status": "failed", "message": event.error}
 
 
 # --- the sink --------------------------------------------------------------------------------

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,7 +15,6 @@ from fastapi.testclient import TestClient
 
 from app.main import create_app
 from app.settings import Settings
-from planner.store import RunStore
 
 
 def _settings(tmp_path: Path, **overrides: Any) -> Settings:
@@ -29,9 +30,17 @@ def _settings(tmp_path: Path, **overrides: Any) -> Settings:
     return Settings(**values)
 
 
+LOCAL = "http://127.0.0.1:8000"  # where a browser on this machine reaches the dashboard
+WS = "ws://127.0.0.1:8000"
+
+
+def _client(settings: Settings) -> TestClient:
+    return TestClient(create_app(settings), base_url=LOCAL)
+
+
 @pytest.fixture()
 def client(tmp_path: Path) -> Iterator[TestClient]:
-    with TestClient(create_app(_settings(tmp_path))) as c:
+    with _client(_settings(tmp_path)) as c:
         yield c
 
 
@@ -48,7 +57,7 @@ def _wait_status(client: TestClient, run_id: str, wanted: set[str], timeout: flo
 
 def _stream(client: TestClient, run_id: str, after: int = -1) -> list[dict[str, Any]]:
     messages = []
-    with client.websocket_connect(f"/api/runs/{run_id}/stream?after={after}") as ws:
+    with client.websocket_connect(f"{WS}/api/runs/{run_id}/stream?after={after}") as ws:
         while True:
             message = json.loads(ws.receive_text())
             messages.append(message)
@@ -75,14 +84,22 @@ def test_catalogs_and_health(client: TestClient) -> None:
     [
         ({"scene": "line-2", "colour": "red"}, "colour", "Extra inputs"),
         ({"scene": "kitchen-99"}, "scene", "kitchen-4"),  # lists the known scenes
-        ({"scene": "../../etc/passwd"}, "scene", "unknown scene"),
-        ({"scene": "/etc/passwd"}, "scene", "unknown scene"),
+        ({"scene": "../../etc/passwd"}, "scene", "should match pattern"),
+        ({"scene": "/etc/passwd"}, "scene", "should match pattern"),
+        ({"scene": "0"}, "scene", "unknown scene"),  # a name, just not one offered
         ({"scene": "line-2", "seed": -1}, "seed", "greater than or equal"),
         ({"scene": "line-2", "planner": "magic"}, "planner", "baseline"),
         ({"scene": "line-2", "budget_s": 0}, "budget_s", "greater than"),
         ({"scene": "line-2", "model": "kitchen"}, "model", "only used by the learned"),
         ({"scene": "line-2", "planner": "learned", "model": "kitchen"}, "model", "domain"),
-        ({"scene": "kitchen-1", "planner": "learned", "model": "../kitchen"}, "model", "unknown"),
+        ({"scene": "kitchen-1", "planner": "learned", "model": "../kitchen"}, "model", "pattern"),
+        ({"scene": "kitchen-1", "planner": "learned", "model": "kitchen-9"}, "model", "unknown"),
+        ({"scene": "line-2", "seed": "0"}, "seed", "valid integer"),  # no coercion
+        ({"scene": "line-2", "k": 2.5}, "k", "valid integer"),
+        ({"scene": "line-2", "k": True}, "k", "valid integer"),
+        ({"scene": "line-2", "budget_s": True}, "budget_s", "valid number"),
+        ({"scene": "line-2", "budget_s": "30"}, "budget_s", "valid number"),
+        ({"scene": 7}, "scene", "valid string"),
     ],
 )
 def test_bad_launches_are_422_naming_the_field(
@@ -100,7 +117,7 @@ def test_unknown_run_is_404(client: TestClient) -> None:
     assert client.get("/api/runs/nope/events").status_code == 404
     assert client.delete("/api/runs/nope").status_code == 404
     assert client.put("/api/viewer", json={"run_id": "nope"}).status_code == 404
-    with client.websocket_connect("/api/runs/nope/stream") as ws:
+    with client.websocket_connect(f"{WS}/api/runs/nope/stream") as ws:
         assert json.loads(ws.receive_text())["kind"] == "error"
 
 
@@ -139,7 +156,7 @@ def test_launch_stream_and_read_a_run(client: TestClient) -> None:
 @pytest.mark.slow
 def test_queue_cancel_and_429(tmp_path: Path) -> None:
     settings = _settings(tmp_path, max_running=1, max_queued=1, cancel_grace_s=2.0)
-    with TestClient(create_app(settings)) as client:
+    with _client(settings) as client:
         body = {"scene": "kitchen-3", "budget_s": 120}
         first = client.post("/api/runs", json=body).json()
         second = client.post("/api/runs", json={**body, "seed": 1}).json()
@@ -149,6 +166,8 @@ def test_queue_cancel_and_429(tmp_path: Path) -> None:
 
         assert client.delete(f"/api/runs/{second['id']}").status_code == 202
         assert client.get(f"/api/runs/{second['id']}").json()["status"] == "cancelled"
+        (closing,) = client.get(f"/api/runs/{second['id']}/events").json()["events"]
+        assert closing["type"] == "run_cancelled" and "before it started" in closing["reason"]
 
         _wait_status(client, first["id"], {"running"})
         deadline = time.monotonic() + 60
@@ -164,12 +183,23 @@ def test_queue_cancel_and_429(tmp_path: Path) -> None:
         assert client.get("/api/health").json()["running"] == 0
 
 
-def test_runs_left_running_are_marked_interrupted(tmp_path: Path) -> None:
-    with RunStore(tmp_path / "runs.db") as store:
-        run_id = store.create_run("line-2", 0, "baseline", {})
-    with TestClient(create_app(_settings(tmp_path))) as client:
+def test_runs_whose_process_died_are_marked_interrupted(tmp_path: Path) -> None:
+    recorder = (  # a process that records the start of a run, then dies
+        "import sys; from planner.store import RunStore; "
+        "print(RunStore(sys.argv[1]).create_run('line-2', 0, 'baseline', {}))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", recorder, str(tmp_path / "runs.db")],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    run_id = done.stdout.strip()
+    with _client(_settings(tmp_path)) as client:
         run = client.get(f"/api/runs/{run_id}").json()
         assert run["status"] == "interrupted" and "stopped" in run["message"]
+        (closing,) = client.get(f"/api/runs/{run_id}/events").json()["events"]
+        assert closing["type"] == "run_failed" and closing["seq"] == 0
 
 
 def test_page_and_plotly_are_served(client: TestClient) -> None:

@@ -178,7 +178,7 @@ def test_a_broken_installed_domain_never_stops_the_server(installed: Path, tmp_p
     settings = Settings(
         database_url=str(tmp_path / "runs.db"), viewer=False, reports_dir=tmp_path / "reports"
     )
-    with TestClient(create_app(settings)) as client:
+    with TestClient(create_app(settings), base_url="http://127.0.0.1:8000") as client:
         domains = {d["name"]: d for d in client.get("/api/domains").json()}
         assert domains["broken"]["loaded"] is False
         assert "numpyy" in domains["broken"]["error"]

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import sqlite3
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -15,11 +17,13 @@ from planner.events import (
     Event,
     NodeAdded,
     NodeVisited,
+    RunCancelled,
+    RunFailed,
     RunFinished,
     RunStarted,
     StreamQueried,
 )
-from planner.store import RunStore, StoreSink, default_db_path
+from planner.store import RunStore, StoreSink, default_db_path, is_alive, process_token
 
 CONFIG: dict[str, Any] = {"k": 10, "budget_s": 60.0, "policy": {"c": 1.4}}
 
@@ -181,16 +185,168 @@ def test_list_runs_filters_newest_first(store: RunStore) -> None:
         store.list_runs(status="done")
 
 
-def test_mark_interrupted_only_touches_running_runs(store: RunStore) -> None:
-    a = store.create_run("kitchen-1", 0, "baseline", {})
-    b = store.create_run("kitchen-1", 1, "baseline", {})
-    c = store.create_run("kitchen-1", 2, "baseline", {})
-    store.finish_run(b, "failed", message="no plan")
+@pytest.fixture
+def gone() -> str:
+    """The owner token of a process that has exited (killed, as kill -9 would)."""
+    process = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    token = process_token(process.pid)
+    process.kill()
+    process.wait()
+    return token
+
+
+@pytest.fixture
+def alive() -> Iterator[str]:
+    """The owner token of another process that is still running (a ``tamp plan``)."""
+    process = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    yield process_token(process.pid)
+    process.kill()
+    process.wait()
+
+
+def _started(store: RunStore, owner: str, seed: int = 0) -> tuple[str, Emitter, StoreSink]:
+    run_id = store.create_run("line-2", seed, "baseline", CONFIG, owner=owner)
+    sink = StoreSink(store, run_id, flush_interval_s=None)
+    emitter = Emitter(run_id, sink)
+    _emit_search(emitter, 2)
+    return run_id, emitter, sink
+
+
+def test_mark_interrupted_finishes_runs_whose_process_is_gone(
+    store: RunStore, gone: str, alive: str
+) -> None:
+    dead, _, sink = _started(store, gone)
+    sink.close()
+    running, _, sink = _started(store, alive, seed=1)
+    sink.close()
+    queued = store.create_run("line-2", 2, "baseline", {}, status="queued", owner=gone)
+    finished = store.create_run("line-2", 3, "baseline", {}, owner=gone)
+    store.finish_run(finished, "failed", message="no plan")
+
     assert store.mark_interrupted() == 2
-    assert [store.get_run(r).status for r in (a, b, c)] == ["interrupted", "failed", "interrupted"]
-    assert store.get_run(a).finished_at is not None
-    assert store.get_run(b).message == "no plan"
+    record = store.get_run(dead)
+    assert record.status == "interrupted" and "stopped" in record.message
+    assert record.finished_at is not None
+    events = store.events(dead)
+    assert [e.seq for e in events] == list(range(8))  # 7 stored + one closing event
+    assert isinstance(events[-1], RunFailed) and "stopped" in events[-1].error
+    assert events[-1].t == events[-2].t
+    (closing,) = store.events(queued)  # a run that never started closes too
+    assert closing.seq == 0 and isinstance(closing, RunFailed)
+    assert store.get_run(running).status == "running"  # its process still runs
+    assert store.get_run(finished).message == "no plan"
     assert store.mark_interrupted() == 0
+
+
+def test_a_stored_closing_event_decides_how_a_dead_run_ended(store: RunStore, gone: str) -> None:
+    solved, emitter, sink = _started(store, gone)
+    emitter.emit(
+        RunFinished,
+        status="solved",
+        planning_s=1.5,
+        execution_s=2.25,
+        oracle_s=0.5,
+        queries=2,
+        message="solved",
+    )
+    sink.close()  # its process died before it could call finish_run
+    cancelled, emitter, sink = _started(store, gone, seed=1)
+    emitter.emit(RunCancelled, reason="cancelled by the user")
+    sink.close()
+    failed, emitter, sink = _started(store, gone, seed=2)
+    emitter.emit(RunFailed, error="RuntimeError: boom")
+    sink.close()
+
+    assert store.mark_interrupted() == 3
+    record = store.get_run(solved)
+    assert (record.status, record.planning_s, record.execution_s, record.oracle_s) == (
+        "solved",
+        1.5,
+        2.25,
+        0.5,
+    )
+    assert (record.queries, record.message) == (2, "solved")
+    assert store.events(solved)[-1].type == "run_finished"  # no second closing event
+    assert (store.get_run(cancelled).status, store.get_run(cancelled).message) == (
+        "cancelled",
+        "cancelled by the user",
+    )
+    assert (store.get_run(failed).status, store.get_run(failed).message) == (
+        "failed",
+        "RuntimeError: boom",
+    )
+    assert all(store.events(r)[-1].seq == 7 for r in (solved, cancelled, failed))
+
+
+def test_settle_run_adds_one_closing_event_once(store: RunStore) -> None:
+    queued = store.create_run("line-2", 0, "baseline", {}, status="queued")
+    record = store.settle_run(queued, "cancelled", "cancelled before it started")
+    assert record is not None and record.status == "cancelled"
+    (closing,) = store.events(queued)
+    assert isinstance(closing, RunCancelled) and closing.reason == "cancelled before it started"
+    assert store.settle_run(queued, "failed", "again") is None  # already over: unchanged
+    assert store.get_run(queued).status == "cancelled" and len(store.events(queued)) == 1
+    with pytest.raises(KeyError, match="unknown run id 'nope'"):
+        store.settle_run("nope", "failed", "x")
+    with pytest.raises(ValueError, match="unknown final status 'running'"):
+        store.settle_run(queued, "running", "x")
+
+
+def test_claim_run_takes_over_a_running_run_only(store: RunStore, gone: str) -> None:
+    run_id = store.create_run("line-2", 0, "baseline", {}, status="queued", owner=gone)
+    assert not store.claim_run(run_id)  # not started yet
+    store.start_run(run_id)
+    assert store.claim_run(run_id)
+    assert store.mark_interrupted() == 0  # this test's process owns it now
+    store.finish_run(run_id, "solved")
+    assert not store.claim_run(run_id)
+
+
+def test_integers_sqlite_cannot_hold_are_refused(store: RunStore) -> None:
+    run_id = store.create_run("line-2", 0, "baseline", {})
+    for call, name in (
+        (lambda: store.events(run_id, after=2**63), "after"),
+        (lambda: store.events(run_id, after=-2), "after"),
+        (lambda: store.events(run_id, limit=2**64), "limit"),
+        (lambda: store.list_runs(limit=-1), "limit"),
+        (lambda: store.list_runs(offset=2**63), "offset"),
+    ):
+        with pytest.raises(ValueError, match=f"{name} must be an integer"):
+            call()
+    assert store.events(run_id, after=2**63 - 1) == []
+
+
+def test_write_listeners_hear_of_events_once_they_are_stored(db: Path, store: RunStore) -> None:
+    run_id = store.create_run("line-2", 0, "baseline", {})
+    heard: list[tuple[str, list[int], int]] = []
+
+    def listener(rid: str, events: list[Event]) -> None:
+        with RunStore(db) as other:  # another connection already sees them
+            heard.append((rid, [e.seq for e in events], len(other.events(rid))))
+
+    def broken(rid: str, events: list[Event]) -> None:
+        raise BrokenPipeError("the server is gone")
+
+    store.add_write_listener(broken)
+    store.add_write_listener(listener)
+    sink = StoreSink(store, run_id, batch_size=3, flush_interval_s=None)
+    _emit_search(Emitter(run_id, sink), 2)
+    sink.close()
+    assert heard == [(run_id, [0, 1, 2], 3), (run_id, [3, 4, 5], 6), (run_id, [6], 7)]
+    assert [e.seq for e in store.events(run_id)] == list(range(7))  # none written twice
+
+
+def test_data_version_changes_when_anyone_commits(db: Path, store: RunStore) -> None:
+    first = store.data_version()
+    assert first is not None and store.data_version() == first
+    run_id = store.create_run("line-2", 0, "baseline", {})
+    second = store.data_version()
+    assert second != first
+    with RunStore(db) as other:
+        other.finish_run(run_id, "solved")
+    assert store.data_version() != second
+    with RunStore("sqlite://") as memory:
+        assert memory.data_version() is None
 
 
 def test_close_flushes_everything_buffered(db: Path) -> None:
@@ -273,7 +429,7 @@ def test_second_store_on_the_same_file_sees_the_data(db: Path, store: RunStore) 
     with sqlite3.connect(db) as conn:
         assert conn.execute("PRAGMA journal_mode").fetchone() == ("wal",)
         indices = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='index'")}
-    assert {"ix_stream_queries_stream", "ix_stream_queries_run_id"} <= indices
+    assert {"ix_stream_queries_stream", "ix_stream_queries_run_id", "ix_runs_created_at"} <= indices
 
 
 def test_unknown_run_ids_are_key_errors_naming_the_id(store: RunStore) -> None:
@@ -391,3 +547,38 @@ def test_a_store_from_before_failure_reasons_opens_and_records_them(db: Path) ->
         assert row.reason == "no path in 150 iterations"
         (event,) = [e for e in store.events(new) if isinstance(e, StreamQueried)]
         assert event.reason == row.reason
+
+
+def test_a_store_from_before_run_owners_opens_and_treats_its_live_runs_as_orphans(
+    db: Path,
+) -> None:
+    with RunStore(db) as store:
+        old = store.create_run("line-2", 0, "baseline", {})
+    with sqlite3.connect(db) as conn:  # the table as an older version wrote it
+        conn.execute("DROP INDEX ix_runs_created_at")
+        conn.execute("ALTER TABLE runs DROP COLUMN owner")
+    with RunStore(db) as store:
+        new = store.create_run("line-2", 1, "baseline", {})
+        assert store.mark_interrupted() == 1  # nobody can say the old run's process lives
+        assert store.get_run(old).status == "interrupted"
+        assert store.get_run(new).status == "running"
+        assert [r.id for r in store.list_runs()] == [new, old]
+
+
+def test_an_exited_owner_not_yet_reaped_counts_as_gone(store: RunStore) -> None:
+    """A worker whose server was killed is adopted by a process that may not reap it soon:
+    its zombie must not keep its run looking alive."""
+    process = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(0.5)"])
+    token = process_token(process.pid)
+    assert is_alive(token)
+    deadline = time.monotonic() + 30
+    stat = Path(f"/proc/{process.pid}/stat")
+    while stat.read_text().rpartition(")")[2].split()[0] != "Z":  # exited, not reaped
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    assert not is_alive(token)
+    run_id = store.create_run("line-2", 0, "baseline", {}, owner=token)
+    assert store.mark_interrupted() == 1 and store.get_run(run_id).status == "interrupted"
+    process.wait()
+    recycled = process_token().rsplit(":", 1)[0] + ":999"  # a live pid, another start time
+    assert is_alive(process_token()) and not is_alive(recycled)
