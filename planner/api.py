@@ -22,7 +22,7 @@ import time
 import uuid
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -138,16 +138,19 @@ class RunResult:
 
 @dataclass(frozen=True)
 class PlanResult:
-    """A run's result with its domain and problem; :meth:`check` validates the plan."""
+    """A run's result with its domain and problem, its plan's validation and its plan file."""
 
     result: RunResult
     loaded: LoadedDomain
     problem: Problem
     runtime: StreamRuntime | None = field(default=None, repr=False)
+    valid: bool | None = None  # None: no plan, or not validated yet (check())
+    message: str = ""  # the validation's message, or why there is no plan
 
     @property
     def status(self) -> str:
-        return self.result.status
+        """The search's status, or failed when its plan does not validate."""
+        return "failed" if self.valid is False else self.result.status
 
     @property
     def solved(self) -> bool:
@@ -177,6 +180,8 @@ class PlanResult:
         bound = self.result.bound
         if bound is None:
             return None, f"no plan ({self.result.status})"
+        if self.valid is not None:
+            return self.valid, self.message
         report: PlanCheck = validate(
             self.loaded,
             self.problem,
@@ -289,8 +294,8 @@ def solve(
     should_stop: Callable[[], bool] | None = None,
 ) -> PlanResult:
     """Run ``config`` (on ``problem`` when given, else on its scene); every step is reported to
-    ``sink``. A run ends with ``run_finished``, ``run_cancelled`` or ``run_failed`` (then the
-    exception propagates)."""
+    ``sink``. A run ends with ``run_finished`` (its plan validated and its plan file in it),
+    ``run_cancelled`` or ``run_failed`` (then the exception propagates)."""
     run_id = run_id or uuid.uuid4().hex
     emitter = Emitter(run_id, sink if sink is not None else ListSink())
     start = time.perf_counter()
@@ -313,14 +318,23 @@ def solve(
     if result.status == "cancelled":
         emitter.emit(RunCancelled, reason="cancelled by the user")
         return out
+    try:  # after the planning clock stopped: the plan is validated before the run ends
+        valid, message = out.check()
+        plan = out.plan_file()
+    except Exception as exc:
+        emitter.emit(RunFailed, error=f"validating the plan: {type(exc).__name__}: {exc}")
+        raise
+    out = replace(out, valid=valid, message=message)
     emitter.emit(
         RunFinished,
-        status=result.status,
+        status=out.status,
         planning_s=result.planning_s,
         execution_s=result.execution_s,
         oracle_s=result.oracle_s,
         queries=len(result.queries),
-        message="solved" if result.solved else f"no plan ({result.status})",
+        message=message,
+        valid=valid,
+        plan=plan,
     )
     return out
 

@@ -244,12 +244,14 @@ class SolutionFound(_EventBase):
 class RunFinished(_EventBase):
     type: ClassVar[str] = "run_finished"
 
-    status: str  # one of FINISH_STATUSES
+    status: str  # one of FINISH_STATUSES: the search's, or failed when its plan does not validate
     planning_s: float
     execution_s: float | None  # None unless solved
     oracle_s: float | None
     queries: int  # stream queries made
     message: str
+    valid: bool | None = None  # whether the plan validated; None without a plan
+    plan: dict[str, Any] | None = None  # the bound plan file (planner/plans.py), when solved
 
     def _validate(self) -> None:
         if self.status not in FINISH_STATUSES:

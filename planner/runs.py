@@ -104,11 +104,11 @@ def record_run(
         raise
     sink.close()
     result, loaded, problem = out.result, out.loaded, out.problem
-    valid, message = out.check()
+    valid, message = out.check()  # validated by solve(), before its run_finished
     plan = out.plan_file()
     if result.status == "cancelled":
         message = "cancelled by the user"
-    status = result.status if valid is not False else "failed"
+    status = out.status
     store.finish_run(
         run_id,
         status,

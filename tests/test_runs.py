@@ -140,3 +140,27 @@ def test_budget_running_out_is_a_recorded_timeout(tmp_path: Path) -> None:
 def test_unknown_planner_lists_the_known() -> None:
     proc = tamp("plan", "--scene", "kitchen-1", "--planner", "magic")
     assert proc.returncode == 2 and "baseline" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_a_plan_that_does_not_validate_ends_the_run_as_failed_in_its_events_too(
+    tmp_path: Path,
+) -> None:
+    """The closing event says what the store says: a solved search whose plan the domain's
+    validator refuses is a failed run, with the validator's message and the plan file."""
+    from dataclasses import replace
+
+    from planner.api import solve
+    from planner.domains import PlanCheck, load_domain
+    from planner.events import ListSink, RunFinished
+
+    line = load_domain("line")
+    strict = replace(
+        line,
+        spec=replace(line.spec, validate=lambda actions, values, problem: PlanCheck(False, "no")),
+    )
+    sink = ListSink()
+    out = solve(RunConfig(scene="line-2", budget_s=30), loaded=strict, sink=sink)
+    assert out.result.solved and out.status == "failed" and out.check() == (False, "no")
+    (finished,) = [e for e in sink.events if isinstance(e, RunFinished)]
+    assert (finished.status, finished.valid, finished.message) == ("failed", False, "no")
+    assert finished.plan is not None and finished.plan["domain"] == "line"

@@ -864,6 +864,7 @@ def _ending(event: Event) -> dict[str, Any]:
             "oracle_s": event.oracle_s,
             "queries": event.queries,
             "message": event.message,
+            "plan": None if event.plan is None else _dumps(event.plan),
         }
     if isinstance(event, RunCancelled):
         return {"status": "cancelled", "message": event.reason}

@@ -240,6 +240,7 @@ def test_mark_interrupted_finishes_runs_whose_process_is_gone(
 
 def test_a_stored_closing_event_decides_how_a_dead_run_ended(store: RunStore, gone: str) -> None:
     solved, emitter, sink = _started(store, gone)
+    plan = {"format": "guided-tamp/plan-v1", "domain": "line", "actions": ["(pick a p r)"]}
     emitter.emit(
         RunFinished,
         status="solved",
@@ -248,6 +249,8 @@ def test_a_stored_closing_event_decides_how_a_dead_run_ended(store: RunStore, go
         oracle_s=0.5,
         queries=2,
         message="solved",
+        valid=True,
+        plan=plan,
     )
     sink.close()  # its process died before it could call finish_run
     cancelled, emitter, sink = _started(store, gone, seed=1)
@@ -266,6 +269,7 @@ def test_a_stored_closing_event_decides_how_a_dead_run_ended(store: RunStore, go
         0.5,
     )
     assert (record.queries, record.message) == (2, "solved")
+    assert record.plan == plan  # the plan file travels in the closing event
     assert store.events(solved)[-1].type == "run_finished"  # no second closing event
     assert (store.get_run(cancelled).status, store.get_run(cancelled).message) == (
         "cancelled",
