@@ -108,10 +108,12 @@ def test_wrong_arity_and_undeclared_variable() -> None:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        ((":action-costs", ":fluents"), "requirement :fluents is not supported"),
-        (("(not (ok ?to))", "(or (ok ?to) (free ?to))"), "disjunctive preconditions"),
-        (("(at ?b ?to) (not (at", "(when (ok ?to) (ok ?to)) (not (at"), "conditional effects"),
-        (("(:functions (total-cost) - number)", "(:derived (ok ?p) (free ?p))"), ":derived"),
+        ((":action-costs", ":durative-actions"), "requirement :durative-actions is not supported"),
+        (("(not (ok ?to))", "(< (total-cost) 3)"), "numeric conditions (< ...) are not supported"),
+        (("(increase (total-cost) 3)", "(assign (total-cost) 3)"), "numeric effect 'assign'"),
+        (("(increase (total-cost) 3)", "(increase (total-cost) (+ 1 2))"), "arithmetic (+ ...)"),
+        (("(:functions (total-cost) - number)", "(:durative-action go)"), ":durative-action"),
+        (("(:functions (total-cost) - number)", "(:functions (f) - pose)"), "object fluents"),
     ],
 )
 def test_unsupported_constructs_say_so(change: tuple[str, str], message: str) -> None:
@@ -121,7 +123,9 @@ def test_unsupported_constructs_say_so(change: tuple[str, str], message: str) ->
 
 
 def test_trailing_garbage_and_empty_file() -> None:
-    assert "expected end of file" in str(error_of(MINI + "\n(extra)"))
+    err = error_of(MINI + "\n(extra)")
+    assert "closes the definition, but more follows" in str(err)
+    assert (err.line, err.column) == (11, 77)  # the ")" that closed (define ...)
     assert "empty" in str(error_of("; nothing but a comment\n"))
 
 
@@ -148,9 +152,10 @@ def test_stream_file_parses() -> None:
         (("(at ?b home)", "(free home)"), "input ?b must appear in a :domain fact"),
         (("(free ?p)", "(free ?q)"), "variable ?q is not declared in stream sample-free"),
         (("(free ?p)", "(cooked ?p)"), "undeclared predicate 'cooked'"),
-        ((":outputs (?p)", ":fluents (at)"), ":fluents in stream sample-free are not supported"),
+        ((":outputs (?p)", ":outputs (?p) :fluents (free)"), "'free', which no action changes"),
+        ((":outputs (?p)", ":outputs (?p) :fluents (atx)"), "'atx', which is not declared"),
         ((":outputs (?p)", ":ouputs (?p)"), "unknown keyword :ouputs"),
-        (("(:stream sample-free", "(:function sample-free"), ":function declarations"),
+        (("(:stream sample-free", "(:optimizer sample-free"), ":optimizer declarations"),
     ],
 )
 def test_stream_errors(change: tuple[str, str], message: str) -> None:
