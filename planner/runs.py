@@ -37,7 +37,7 @@ from planner.events import (
 )
 from planner.pddl.structs import Atom, Problem
 from planner.search.baseline import BaselineConfig
-from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
+from planner.search.binding import BoundPlan, bind_sequentially, plan_cost, stream_contexts
 from planner.search.learned import LearnedPolicy, Predictor, StreamCost, stream_rows
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
@@ -214,20 +214,21 @@ def _run(
 ) -> tuple[RunResult, LoadedDomain, Problem]:
     say = progress or (lambda _m: None)
     loaded, problem = problem_for_scene(config.scene, seed=config.seed)
+    # Stream-file functions (action costs) are valued by the samplers' runtime while planning.
+    runtime = loaded.runtime(problem, seed=config.seed) if loaded.streams.functions else None
     abstract = plan_abstract(
         loaded.domain,
         loaded.streams,
         problem,
         AbstractConfig(k=config.k, diversity_ignore=loaded.spec.diversity_ignore),
         progress=say,
+        functions=runtime,
     )
     topk_s = abstract.seconds["topk"]
     plans: tuple[AbstractPlan, ...] = abstract.plans
     initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
     initial.update(problem.values)
-    fluents = frozenset(
-        a.predicate for act in loaded.domain.actions for a in act.add_effects + act.del_effects
-    )
+    fluents = loaded.domain.fluent_predicates
     states: list[list[frozenset[Atom]]] = []
     predictor: Predictor | None = None
     if config.planner != "sequential":
@@ -245,7 +246,8 @@ def _run(
                 loaded.spec.unread,
             )
     emitter.emit(AbstractPlansFound, plans=plan_summaries(plans), seconds=abstract.seconds["total"])
-    runtime = loaded.runtime(problem, seed=config.seed)
+    if runtime is None:
+        runtime = loaded.runtime(problem, seed=config.seed)
     deadline = start + config.budget_s
     if config.planner == "sequential":
         recorder = _SequentialRecorder(
@@ -281,7 +283,10 @@ def _run(
     execution_s = oracle_s = None
     if outcome.solved and outcome.plan_index is not None:
         skeleton = plans[outcome.plan_index]
-        bound = BoundPlan(skeleton, {**initial, **outcome.values})
+        values = {**initial, **outcome.values}
+        bound = BoundPlan(
+            skeleton, values, plan_cost(skeleton, loaded.domain, problem, values, runtime)
+        )
         branch = set(search.tree.path(outcome.node_id or 0))
         execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
         oracle_s = topk_s + outcome.oracle_query_s
