@@ -13,7 +13,7 @@ from planner.abstract.instantiate import (
     fact_bindings,
 )
 from planner.abstract.support import Explainer, Support
-from planner.pddl.semantics import Evaluator, Universe
+from planner.pddl.semantics import Evaluator, Universe, index_facts
 from planner.pddl.structs import (
     Action,
     Atom,
@@ -186,7 +186,7 @@ def _recover_adl(
     preconditions: Sequence[Formula | None] | None,
 ) -> None:
     universe = Universe.of_problem(domain, problem, inst.objects)
-    certified = inst.facts
+    certified = index_facts(inst.facts)  # the same for every step: indexed once
     functions = {f.name: f for f in streams.functions} if streams is not None else {}
     state: frozenset[Atom] = frozenset(problem.init)
     # Lazily evaluated predicates are false in O but may hold in R: their (absent) facts must
@@ -204,7 +204,7 @@ def _recover_adl(
 
     for step, action in enumerate(actions):
         schema, mapping = _schema(domain, action)
-        ev = Evaluator(domain, universe, state | certified, uncertain=lazy)
+        ev = Evaluator(domain, universe, state, background=certified, uncertain=lazy)
         ex = Explainer(domain, ev, inst, problem.init, needed)
         for name in action.args:
             if _is_optimistic(name) and name in inst.producer:
@@ -236,7 +236,7 @@ def _recover_adl(
                     step,
                 )
         state = ev.effects(schema, action.args).apply(state)
-    ev = Evaluator(domain, universe, state | certified, uncertain=lazy)
+    ev = Evaluator(domain, universe, state, background=certified, uncertain=lazy)
     ex = Explainer(domain, ev, inst, problem.init, needed)
     demand(ex.formula(problem.goal_formula, {}, True), "the goal", len(actions))
 
@@ -273,11 +273,11 @@ def symbolic_states(
         return states
     if universe is None:
         raise ValueError("conditional effects need the universe of objects to be evaluated")
-    extra = frozenset(certified)
+    extra = index_facts(certified)
     current = init
     for action in actions:
         schema, _ = _schema(domain, action)
-        ev = Evaluator(domain, universe, current | extra)
+        ev = Evaluator(domain, universe, current, background=extra)
         current = ev.effects(schema, action.args).apply(current)
         states.append(current)
     return states

@@ -146,6 +146,17 @@ def derived_strata(domain: Domain) -> dict[str, frozenset[str]]:
     return {name: frozenset(n for n in reach[name] if name in reach[n]) for name in rules}
 
 
+FactIndex = dict[str, set[tuple[str, ...]]]  # predicate -> argument tuples
+
+
+def index_facts(facts: Iterable[Atom]) -> FactIndex:
+    """Facts by predicate (for an evaluator's ``background``, built once and shared)."""
+    index: FactIndex = defaultdict(set)
+    for atom in facts:
+        index[atom.predicate].add(atom.args)
+    return index
+
+
 @dataclass(frozen=True)
 class GroundEffects:
     """What one applied action changes: delete first, then add."""
@@ -164,21 +175,21 @@ class Evaluator:
         self,
         domain: Domain,
         universe: Universe,
-        facts: Collection[Atom],
+        facts: Iterable[Atom],
         *,
+        background: FactIndex | None = None,
         unknown: Callable[[Atom], bool] | None = None,
         uncertain: frozenset[str] = frozenset(),
     ) -> None:
-        """``unknown`` tells which absent atoms are unknown rather than false; their
-        predicates must be in ``uncertain``."""
+        """The state is ``facts`` and, when given, the ``background`` facts (the same for
+        many states: index them once). ``unknown`` tells which absent atoms are unknown
+        rather than false; their predicates must be in ``uncertain``."""
         self.domain = domain
         self.universe = universe
-        self.facts = facts if isinstance(facts, set | frozenset) else frozenset(facts)
         self._unknown = unknown
         self._uncertain = uncertain
-        self._index: dict[str, set[tuple[str, ...]]] = defaultdict(set)
-        for atom in self.facts:
-            self._index[atom.predicate].add(atom.args)
+        self._index = index_facts(facts)
+        self._background: FactIndex = background or {}
         self._rules: dict[str, list[DerivedPredicate]] = defaultdict(list)
         for d in domain.derived:
             self._rules[d.name].append(d)
@@ -197,7 +208,9 @@ class Evaluator:
             return atom.args[0] == atom.args[1]
         if atom.predicate in self._rules:
             return self._derived_truth(atom)
-        if atom.args in self._index.get(atom.predicate, ()):
+        if atom.args in self._index.get(atom.predicate, ()) or atom.args in self._background.get(
+            atom.predicate, ()
+        ):
             return True
         if self._unknown is not None and self._unknown(atom):
             return None
@@ -288,21 +301,13 @@ class Evaluator:
         if isinstance(formula, Literal):
             value = self.atom(formula.atom.substitute(env))
             return value if value is None or formula.positive else not value
-        if isinstance(formula, And):
-            result: Truth = True
+        if isinstance(formula, And | Or):
+            decisive = isinstance(formula, Or)  # one true part decides an or, a false one an and
+            result: Truth = not decisive
             for part in formula.parts:
                 value = self.truth(part, env)
-                if value is False:
-                    return False
-                if value is None:
-                    result = None
-            return result
-        if isinstance(formula, Or):
-            result = False
-            for part in formula.parts:
-                value = self.truth(part, env)
-                if value is True:
-                    return True
+                if value is decisive:
+                    return decisive
                 if value is None:
                     result = None
             return result
@@ -359,7 +364,7 @@ class Evaluator:
                 return
             atom = drivers[i]
             source = self._fixing.get(atom.predicate)
-            tuples = source if source is not None else self._index.get(atom.predicate, set())
+            tuples = source if source is not None else self._facts_of(atom.predicate)
             for args in list(tuples):
                 added: dict[str, str] = {}
                 ok = True
@@ -381,6 +386,11 @@ class Evaluator:
                     yield from extend(i + 1, {**binding, **added})
 
         yield from extend(0, base)
+
+    def _facts_of(self, predicate: str) -> set[tuple[str, ...]]:
+        own = self._index.get(predicate, set())
+        more = self._background.get(predicate)
+        return own | more if more else own
 
     # --- effects --------------------------------------------------------------------------
 
