@@ -44,6 +44,8 @@ class BoundPlan:
 def plan_states(plan: AbstractPlan, domain: Domain, problem: Problem) -> list[frozenset[Atom]]:
     """The fluent state before each action of ``plan`` and after the last, its conditional
     effects evaluated with the facts its streams certify."""
+    if not any(domain.action(a.name).effects for a in plan.actions):
+        return symbolic_states(plan.actions, domain, problem.init)
     universe = Universe.of_problem(
         domain, problem, (o for inst in plan.stream_plan for o in inst.typed_outputs)
     )

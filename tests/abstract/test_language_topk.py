@@ -11,6 +11,7 @@ import pytest
 from planner.abstract import (
     AbstractPlan,
     AbstractResult,
+    GroundAction,
     PlanReplayError,
     UnreachableGoalError,
     instantiate,
@@ -129,6 +130,11 @@ def test_either_types_admit_both_types_and_nothing_else(backend: str) -> None:
     vice = replace(case.problem, goal=(Literal(Atom("in", ("vice", "goal"))),))
     with pytest.raises(UnreachableGoalError):
         abstract(case, backend, k=1, problem=vice)
+    plan = plans("either", backend).plans[0]
+    wrong = AbstractPlan((GroundAction("pick", ("vice", "x0-vice", "start")),), (), 1.0)
+    with pytest.raises(PlanReplayError, match=r"vice is not a known \(either block tool\)"):
+        replay(wrong, case.domain, case.problem)
+    assert plan.actions[0].args[0] != "vice"
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -142,6 +148,19 @@ def test_function_costs_from_init_rank_the_plans(backend: str) -> None:
         ("shelf", "hall"),
         ("hall", "depot"),
     ]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_road_without_a_value_is_not_driven(backend: str) -> None:
+    """An undefined function value makes the action inapplicable (as in PDDL), rather than
+    crashing the translator: without (road hall shelf) the detour works one way only."""
+    case = load("costs")
+    values = dict(case.problem.function_values)
+    del values[FunctionTerm("road", ("hall", "shelf"))]
+    problem = replace(case.problem, function_values=values)
+    result = abstract(case, backend, k=3, problem=problem)
+    assert all(a.args != ("hall", "shelf") for p in result.plans for a in p.actions)
+    assert result.plans[0].cost == 9.5 + 1 + 3.25 + 2.5 + 1
 
 
 def test_stream_functions_are_valued_where_bound_and_bounded_elsewhere() -> None:
