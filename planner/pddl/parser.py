@@ -538,9 +538,7 @@ def parse_domain(text: str, *, file: str = "<string>") -> Domain:
     derived_names = {d.name for d in derived}
     actions: dict[str, Action] = {}
     for anode in action_nodes:
-        action = _parse_action(
-            reader, anode, predicates, const_names, uses_costs, functions, known_types
-        )
+        action = _parse_action(reader, anode, predicates, const_names, functions, known_types)
         if action.name in actions:
             raise reader.error(anode, f"action {action.name!r} is defined twice")
         for atom in _changed(action):
@@ -558,7 +556,9 @@ def parse_domain(text: str, *, file: str = "<string>") -> Domain:
         constants=tuple(c for c, _ in constants),
         predicates=tuple(predicates.values()),
         actions=tuple(actions.values()),
-        uses_action_costs=uses_costs,
+        # PDDLStream's dialect: (increase (total-cost) ...) without declaring total-cost
+        uses_action_costs=uses_costs
+        or any(a.cost is not None or a.cost_terms for a in actions.values()),
         source=file,
         derived=derived,
         functions=tuple(functions.values()),
@@ -610,7 +610,6 @@ def _parse_action(
     lst: SList,
     predicates: dict[str, Predicate],
     constants: set[str],
-    uses_costs: bool,
     functions: dict[str, FunctionDecl],
     known_types: set[str],
 ) -> Action:
@@ -645,7 +644,7 @@ def _parse_action(
     conditions: tuple[Formula, ...] = ()
     if pre_node is not None:
         pre, conditions = _split(_formula(reader, pre_node, scope))
-    effects = _Effects(reader, scope, uses_costs)
+    effects = _Effects(reader, scope)
     if eff_node is not None:
         effects.walk(eff_node, (), ())
     return Action(
@@ -665,10 +664,9 @@ class _Effects:
     """Collects an action's effects: plain adds and deletes, conditional or quantified
     groups, and its cost."""
 
-    def __init__(self, reader: _Reader, scope: _Scope, uses_costs: bool) -> None:
+    def __init__(self, reader: _Reader, scope: _Scope) -> None:
         self.reader = reader
         self.scope = scope
-        self.uses_costs = uses_costs
         self.adds: list[Atom] = []
         self.dels: list[Atom] = []
         self.conditional: list[ConditionalEffect] = []
@@ -693,7 +691,7 @@ class _Effects:
                 for item in elst.items[1:]:
                     self.walk(item, variables, conditions)
                 return
-            group = _Effects(reader, self.scope, self.uses_costs)
+            group = _Effects(reader, self.scope)
             for item in elst.items[1:]:
                 group.walk(item, variables, conditions)
             self._nested(group, elst, variables, conditions)
@@ -702,7 +700,7 @@ class _Effects:
             if len(elst.items) != 3:
                 raise reader.error(elst, "expected (when CONDITION EFFECT)")
             condition = _formula(reader, elst.items[1], scope)
-            group = _Effects(reader, self.scope, self.uses_costs)
+            group = _Effects(reader, self.scope)
             group.walk(elst.items[2], variables, (*conditions, condition))
             self._nested(group, elst, variables, (*conditions, condition))
             return
@@ -713,7 +711,7 @@ class _Effects:
             clash = {v.name for v in variables} & {v.name for v in inner}
             if clash:
                 raise reader.error(elst, f"(forall ...) rebinds {sorted(clash)[0]}")
-            group = _Effects(reader, self.scope, self.uses_costs)
+            group = _Effects(reader, self.scope)
             group.walk(elst.items[2], (*variables, *inner), conditions)
             self._nested(group, elst, (*variables, *inner), conditions)
             return
@@ -755,8 +753,6 @@ class _Effects:
 
     def _cost(self, lst: SList) -> None:
         reader = self.reader
-        if not self.uses_costs:
-            raise reader.error(lst, "(increase ...) needs (:functions (total-cost) - number)")
         if len(lst.items) != 3:
             raise reader.error(lst, "expected (increase (total-cost) N)")
         target = reader.slist(lst.items[1], "(total-cost)")

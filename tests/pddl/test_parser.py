@@ -177,3 +177,13 @@ def test_problem_errors_name_the_object() -> None:
         parse_problem("(define (problem p) (:domain other) (:goal (ok home)))", d)
     with pytest.raises(PDDLError, match=r"expected a \(:goal"):
         parse_problem("(define (problem p) (:domain mini) (:init))", d)
+
+
+def test_costs_without_declaring_total_cost_as_pddlstream_writes_them() -> None:
+    text = MINI.replace("(:functions (total-cost) - number)", "(:functions (dist ?a ?b))")
+    text = text.replace("(increase (total-cost) 3)", "(increase (total-cost) (dist ?from ?to))")
+    d = parse_domain(text, file="pddlstream.pddl")
+    assert d.uses_action_costs and d.action("move").cost_terms[0].name == "dist"
+    assert "(:functions (total-cost) - number (dist ?a - object ?b - object) - number)" in (
+        write_domain(d)
+    )
