@@ -772,17 +772,23 @@ class _Effects:
             raise reader.unsupported(
                 amount, f"arithmetic ({fname} ...) in costs is not supported; use one function"
             )
-        decl = self.scope.functions.get(fname)
-        if decl is None:
-            raise reader.error(amount, f"undeclared function {fname!r} in {self.scope.owner}")
-        args = tuple(reader.symbol(a, f"an argument of ({fname} ...)") for a in amount.items[1:])
-        if len(args) != decl.arity:
-            raise reader.error(
-                amount, f"function {fname!r} takes {decl.arity} arguments but {len(args)} are given"
-            )
-        for arg, at in zip(args, amount.items[1:], strict=True):
-            _check_term(reader, arg, at, self.scope)
-        self.cost_terms.append(FunctionTerm(fname, args))
+        self.cost_terms.append(_function_term(reader, amount, self.scope))
+
+
+def _function_term(reader: _Reader, lst: SList, scope: _Scope) -> FunctionTerm:
+    """``(f a ?x)``: a declared function, its arity, its terms in scope."""
+    name = reader.head(lst, "a function name")
+    decl = scope.functions.get(name)
+    if decl is None:
+        raise reader.error(lst, f"undeclared function {name!r} in {scope.owner}")
+    args = tuple(reader.symbol(a, f"an argument of ({name} ...)") for a in lst.items[1:])
+    if len(args) != decl.arity:
+        raise reader.error(
+            lst, f"function {name!r} takes {decl.arity} arguments but {len(args)} are given"
+        )
+    for arg, at in zip(args, lst.items[1:], strict=True):
+        _check_term(reader, arg, at, scope)
+    return FunctionTerm(name, args)
 
 
 @_paused
@@ -891,17 +897,7 @@ def _init_value(
         raise reader.error(lst.items[2], f"expected a non-negative number, not {amount!r}")
     if fname == TOTAL_COST:
         return
-    decl = scope.functions.get(fname)
-    if decl is None:
-        raise reader.error(target, f"undeclared function {fname!r} in {scope.owner}")
-    args = tuple(reader.symbol(a, f"an object in ({fname} ...)") for a in target.items[1:])
-    if len(args) != decl.arity:
-        raise reader.error(
-            target, f"function {fname!r} takes {decl.arity} arguments but {len(args)} are given"
-        )
-    for arg, at in zip(args, target.items[1:], strict=True):
-        _check_term(reader, arg, at, scope)
-    term = FunctionTerm(fname, args)
+    term = _function_term(reader, target, scope)
     if term in values:
         raise reader.error(lst, f"{term} is given a value twice")
     values[term] = value

@@ -187,3 +187,27 @@ def test_costs_without_declaring_total_cost_as_pddlstream_writes_them() -> None:
     assert "(:functions (total-cost) - number (dist ?a - object ?b - object) - number)" in (
         write_domain(d)
     )
+
+
+def test_function_terms_are_checked_in_costs_and_values() -> None:
+    text = MINI.replace("(:functions (total-cost) - number)", "(:functions (dist ?a ?b))")
+    err = error_of(text.replace("(increase (total-cost) 3)", "(increase (total-cost) (dst ?to))"))
+    assert "undeclared function 'dst' in action move" in str(err)
+    err = error_of(text.replace("(increase (total-cost) 3)", "(increase (total-cost) (dist ?to))"))
+    assert "function 'dist' takes 2 arguments but 1 are given" in str(err)
+    d = parse_domain(text)
+
+    def problem(init: str) -> PDDLError:
+        with pytest.raises(PDDLError) as info:
+            parse_problem(
+                f"(define (problem p) (:domain mini) (:objects a - block x - pose)\n"
+                f"  (:init {init}) (:goal (at a home)))",
+                d,
+                file="p.pddl",
+            )
+        return info.value
+
+    assert "function 'dist' takes 2 arguments" in str(problem("(= (dist x) 1)"))
+    assert "expected a non-negative number, not '-1'" in str(problem("(= (dist x home) -1)"))
+    assert "given a value twice" in str(problem("(= (dist x home) 1) (= (dist x home) 2)"))
+    assert "unknown object or constant 'y'" in str(problem("(= (dist x y) 1)"))
