@@ -27,7 +27,7 @@ from planner.abstract import (
 from planner.abstract.topk import DEFAULT_TOPK
 from planner.domains import get_domain, known_domains, problem_for_scene
 from planner.domains.kitchen.plan_io import PlanFileError
-from planner.pddl import PDDLError, Problem
+from planner.pddl import PDDLError, Problem, StreamSet
 from planner.runs import DEFAULT_PLANNER, PLANNERS
 from planner.scene import SceneError, known_scenes
 from planner.streams import StreamBindingError
@@ -220,7 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _plan_json(
-    rank: int, plan: AbstractPlan, problem: Problem, domain: Any, streams: Any = None
+    rank: int, plan: AbstractPlan, problem: Problem, domain: Any, streams: StreamSet | None = None
 ) -> dict[str, Any]:
     try:
         replay(plan, domain, problem, streams)
