@@ -355,12 +355,16 @@ def _solve(
         )
     elif loaded is None:
         raise ValueError("a problem needs its domain")
+    # Stream-file functions (action costs) are valued by the samplers' runtime while planning;
+    # without them the runtime is made after the plans are reported, as it always was.
+    runtime = loaded.runtime(problem, seed=config.seed) if loaded.streams.functions else None
     abstract = plan_abstract(
         loaded.domain,
         loaded.streams,
         problem,
         AbstractConfig(k=config.k, diversity_ignore=loaded.spec.diversity_ignore),
         progress=progress or (lambda _m: None),
+        functions=runtime,
     )
     initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
     initial.update(problem.values)
@@ -377,7 +381,7 @@ def _solve(
     emitter.emit(
         AbstractPlansFound, plans=plan_summaries(task.plans), seconds=abstract.seconds["total"]
     )
-    task.runtime = loaded.runtime(problem, seed=config.seed)
+    task.runtime = runtime if runtime is not None else loaded.runtime(problem, seed=config.seed)
     budget = Budget(start, start + config.budget_s, progress, should_stop)
     outcome = planner.solve(task, emitter, budget)
     result = RunResult(

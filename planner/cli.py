@@ -35,7 +35,7 @@ from planner.domains import (
     scene_domain,
     scene_refs,
 )
-from planner.pddl import PDDLError, Problem
+from planner.pddl import PDDLError, Problem, StreamSet
 from planner.planners import DEFAULT_PLANNER, PLANNERS, get_planner
 from planner.plans import PlanFileError
 from planner.scene import SceneError
@@ -289,9 +289,11 @@ def _domain_ref(loaded: LoadedDomain, given: str | None) -> str | None:
     return given
 
 
-def _plan_json(rank: int, plan: AbstractPlan, problem: Problem, domain: Any) -> dict[str, Any]:
+def _plan_json(
+    rank: int, plan: AbstractPlan, problem: Problem, domain: Any, streams: StreamSet | None = None
+) -> dict[str, Any]:
     try:
-        replay(plan, domain, problem)
+        replay(plan, domain, problem, streams)
         valid, error = True, None
     except PlanReplayError as exc:
         valid, error = False, str(exc)
@@ -353,7 +355,10 @@ def cmd_abstract(args: argparse.Namespace) -> int:
     result = plan_abstract(
         loaded.domain, loaded.streams, problem, config, progress=_progress_line()
     )
-    plans = [_plan_json(i + 1, p, problem, loaded.domain) for i, p in enumerate(result.plans)]
+    plans = [
+        _plan_json(i + 1, p, problem, loaded.domain, loaded.streams)
+        for i, p in enumerate(result.plans)
+    ]
     if sys.stderr.isatty():
         sys.stderr.write("\r\033[K")
     if args.json:
@@ -477,6 +482,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         "topk_s": round(result.topk_s, 3),
         "oracle_s": None if result.oracle_s is None else round(result.oracle_s, 3),
         "execution_s": None if result.execution_s is None else round(result.execution_s, 3),
+        "cost": result.bound.cost if result.bound is not None else None,
         "nodes": result.nodes,
         "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
         "reused": result.reused,
@@ -493,6 +499,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         line += ")"
         if result.execution_s is not None:
             line += f", execution {result.execution_s:.2f} s"
+        if result.bound is not None and result.bound.cost is not None:
+            line += f", plan cost {result.bound.cost:g}"
         print(line)
         print(
             f"  tree nodes: {result.nodes}, queries: {len(result.queries)}"

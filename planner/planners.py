@@ -35,7 +35,7 @@ from planner.domains.spec import LoadedDomain
 from planner.events import Emitter, ModelPrediction, NodeAdded, SolutionFound, StreamQueried
 from planner.pddl.structs import Atom, Problem
 from planner.search.baseline import BaselineConfig
-from planner.search.binding import BoundPlan, bind_sequentially, stream_contexts
+from planner.search.binding import BoundPlan, bind_sequentially, plan_cost, stream_contexts
 from planner.search.learned import LearnedConfig, LearnedPolicy, Predictor, StreamCost, stream_rows
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
@@ -224,7 +224,9 @@ class _TreeSearchPlanner(Planner):
         execution_s = oracle_s = None
         if outcome.solved and outcome.plan_index is not None:
             skeleton = task.plans[outcome.plan_index]
-            bound = BoundPlan(skeleton, {**task.initial, **outcome.values})
+            values = {**task.initial, **outcome.values}
+            cost = plan_cost(skeleton, task.loaded.domain, task.problem, values, task.runtime)
+            bound = BoundPlan(skeleton, values, cost)
             branch = set(search.tree.path(outcome.node_id or 0))
             execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
             oracle_s = task.topk_s + outcome.oracle_query_s

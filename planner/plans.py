@@ -210,7 +210,12 @@ def validate(
     if streams is None:
         return PlanCheck(False, "cannot validate: the plan file has no stream plan to replay")
     try:
-        replay(AbstractPlan(tuple(actions), tuple(streams), 0.0), loaded.domain, problem)
+        replay(
+            AbstractPlan(tuple(actions), tuple(streams), 0.0),
+            loaded.domain,
+            problem,
+            loaded.streams,
+        )
     except PlanReplayError as exc:
         return PlanCheck(False, f"invalid: {exc}")
     missing = sorted(

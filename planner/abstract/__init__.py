@@ -1,5 +1,11 @@
 """Abstract planning: optimistic stream instances, top-k plans, and their stream plans."""
 
+from planner.abstract.compile import (
+    DEFAULT_COST_SCALE,
+    FunctionEvaluator,
+    PlannerTask,
+    compile_planner_task,
+)
 from planner.abstract.errors import (
     AbstractPlanningError,
     InstantiationLimitError,
@@ -40,6 +46,7 @@ from planner.abstract.topk import (
 )
 
 __all__ = [
+    "DEFAULT_COST_SCALE",
     "DEFAULT_TOPK",
     "MAX_K",
     "OPTIMISTIC_PREFIX",
@@ -48,11 +55,13 @@ __all__ = [
     "AbstractPlan",
     "AbstractPlanningError",
     "AbstractResult",
+    "FunctionEvaluator",
     "GroundAction",
     "InstantiationLimitError",
     "KStarPlanner",
     "OptimisticInstantiation",
     "PlanReplayError",
+    "PlannerTask",
     "StreamInstance",
     "SymKPlanner",
     "TopKPlanner",
@@ -61,6 +70,7 @@ __all__ = [
     "UnreachableGoalError",
     "action_multiset",
     "canonical_key",
+    "compile_planner_task",
     "compile_task",
     "get_topk_planner",
     "instantiate",

@@ -3,6 +3,10 @@
 Level by level, every stream whose ``:domain`` holds on the facts known so far gets one instance
 per input binding, and each output becomes a fresh optimistic object (``opt-q3``). Its certified
 facts join the fact set for the next level. Levels and instances are bounded.
+
+Rules are instantiated like tests. A lazily evaluated predicate (``(:predicate (P ?x) ...)``)
+gets an instance per binding of its domain too, but certifies nothing: planning assumes ``P``
+false, and the instance is the test a plan needs when it relies on ``(not (P ...))``.
 """
 
 from __future__ import annotations
@@ -13,7 +17,15 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from planner.abstract.errors import InstantiationLimitError
-from planner.pddl.structs import Atom, Problem, Stream, StreamSet, TypedName
+from planner.pddl.structs import (
+    OBJECT_TYPE,
+    Atom,
+    Problem,
+    Stream,
+    StreamKind,
+    StreamSet,
+    TypedName,
+)
 
 log = logging.getLogger(__name__)
 
@@ -30,6 +42,17 @@ class StreamInstance:
     domain: tuple[Atom, ...]  # grounded :domain facts
     certified: tuple[Atom, ...]  # grounded :certified facts
     level: int  # 1 = needs only initial facts
+    kind: StreamKind = "stream"  # a rule, or the test of a lazily evaluated predicate
+    output_types: tuple[str, ...] = ()  # declared type of each output (object if none)
+
+    def __post_init__(self) -> None:
+        if self.output_types and len(self.output_types) != len(self.outputs):
+            raise ValueError(f"{self.stream}: one type per output is needed")
+
+    @property
+    def typed_outputs(self) -> tuple[TypedName, ...]:
+        types = self.output_types or (OBJECT_TYPE,) * len(self.outputs)
+        return tuple(TypedName(o, t) for o, t in zip(self.outputs, types, strict=True))
 
     def __str__(self) -> str:
         outs = f" -> {' '.join(self.outputs)}" if self.outputs else ""
@@ -45,13 +68,15 @@ class OptimisticInstantiation:
     certifier: Mapping[Atom, int] = field(repr=False)  # fact -> index of its first instance
     levels: int  # levels actually used
     producer: Mapping[str, int] = field(repr=False)  # optimistic object -> instance index
+    # (P args) of a lazily evaluated predicate -> index of the instance that tests it
+    tests: Mapping[Atom, int] = field(default_factory=dict, repr=False)
 
     @property
     def facts(self) -> frozenset[Atom]:
         return frozenset(self.certifier)
 
 
-def _bindings(
+def fact_bindings(
     atoms: Sequence[Atom], facts: Mapping[str, set[tuple[str, ...]]]
 ) -> Iterator[dict[str, str]]:
     """Every assignment of the atoms' variables under which all atoms are facts."""
@@ -107,13 +132,14 @@ def instantiate(
     seen: set[tuple[str, tuple[str, ...]]] = set()
     certifier: dict[Atom, int] = {}
     producer: dict[str, int] = {}
+    tests: dict[Atom, int] = {}
     objects: list[TypedName] = []
     counters: dict[str, int] = defaultdict(int)
     levels = 0
     for level in range(1, max_levels + 1):
         new: list[tuple[Stream, tuple[str, ...], dict[str, str]]] = []
         for stream in streams.streams:
-            for binding in _bindings(stream.domain, facts):
+            for binding in fact_bindings(stream.domain, facts):
                 inputs = tuple(binding[v] for v in stream.inputs)
                 if (stream.name, inputs) in seen:
                     continue
@@ -145,12 +171,18 @@ def instantiate(
                 domain=tuple(a.substitute(mapping) for a in stream.domain),
                 certified=tuple(a.substitute(mapping) for a in stream.certified),
                 level=level,
+                kind=stream.kind,
+                output_types=tuple(o.type for o in stream.outputs),
             )
             instances.append(inst)
             for name in outputs:
                 producer[name] = index
+            if stream.kind == "predicate":
+                tests.setdefault(inst.certified[0], index)
         # Facts of this level become usable only at the next level.
         for index in range(len(instances) - len(new), len(instances)):
+            if instances[index].kind == "predicate":
+                continue  # assumed false: a lazy test certifies nothing
             for atom in instances[index].certified:
                 if atom not in problem.init and atom not in certifier:
                     certifier[atom] = index
@@ -162,4 +194,5 @@ def instantiate(
         certifier=certifier,
         levels=levels,
         producer=producer,
+        tests=tests,
     )

@@ -15,6 +15,7 @@ from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from planner.abstract.compile import DEFAULT_COST_SCALE, FunctionEvaluator, compile_planner_task
 from planner.abstract.instantiate import OptimisticInstantiation, instantiate
 from planner.abstract.skeleton import (
     AbstractPlan,
@@ -25,7 +26,6 @@ from planner.abstract.skeleton import (
 )
 from planner.abstract.topk import DEFAULT_TOPK, TOPK_PLANNERS, get_topk_planner
 from planner.pddl.structs import Atom, Domain, Problem, StreamSet
-from planner.pddl.writer import write_domain, write_problem
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +46,8 @@ class AbstractConfig:
     diversity_ignore: tuple[str, ...] = ()  # actions left out when comparing plans for diversity
     timeout_s: float = 300.0  # wall-clock limit of one top-k call
     max_requested: int = 4 * MAX_K  # never ask the top-k planner for more plans than this
+    # Non-integer costs reach the planners multiplied by this and rounded (they take integers).
+    cost_scale: float = DEFAULT_COST_SCALE
 
     def __post_init__(self) -> None:
         if not 1 <= self.k <= MAX_K:
@@ -61,6 +63,8 @@ class AbstractConfig:
             raise ValueError(f"oversample must be at least 1, got {self.oversample}")
         if self.timeout_s <= 0:
             raise ValueError(f"timeout_s must be positive, got {self.timeout_s}")
+        if self.cost_scale <= 0:
+            raise ValueError(f"cost_scale must be positive, got {self.cost_scale}")
 
 
 @dataclass(frozen=True)
@@ -91,12 +95,17 @@ class AbstractResult:
 
 
 def compile_task(
-    domain: Domain, problem: Problem, inst: OptimisticInstantiation
+    domain: Domain,
+    problem: Problem,
+    inst: OptimisticInstantiation,
+    *,
+    streams: StreamSet | None = None,
+    functions: FunctionEvaluator | None = None,
 ) -> tuple[str, str]:
-    """The classical task: the domain's actions, optimistic facts added to the initial state."""
-    return write_domain(domain), write_problem(
-        problem, domain, extra_objects=inst.objects, extra_init=inst.facts
-    )
+    """The classical task: the domain's actions, optimistic facts added to the initial state
+    (see :mod:`planner.abstract.compile`)."""
+    task = compile_planner_task(domain, problem, inst, streams=streams, functions=functions)
+    return task.domain_pddl, task.problem_pddl
 
 
 def _select_diverse(
@@ -125,10 +134,14 @@ def plan_abstract(
     config: AbstractConfig,
     *,
     progress: Callable[[str], None] | None = None,
+    functions: FunctionEvaluator | None = None,
 ) -> AbstractResult:
     """Find ``config.k`` unique skeletons (fewer if the planner runs out).
 
     ``progress`` receives one line before each top-k call and after it (for a terminal).
+    ``functions`` gives the stream file's numeric functions their values where every input
+    is a real object, and their lower bounds elsewhere (without it every stream function is
+    worth 0 to the planner: the default lower bound). Plan costs are in the domain's units.
     """
     say = progress or (lambda _msg: None)
     t0 = time.perf_counter()
@@ -136,7 +149,15 @@ def plan_abstract(
         streams, problem, max_levels=config.max_levels, max_instances=config.max_instances
     )
     t_inst = time.perf_counter() - t0
-    domain_pddl, problem_pddl = compile_task(domain, problem, inst)
+    task = compile_planner_task(
+        domain,
+        problem,
+        inst,
+        streams=streams,
+        functions=functions,
+        cost_scale=config.cost_scale,
+    )
+    domain_pddl, problem_pddl = task.domain_pddl, task.problem_pddl
     backend = get_topk_planner(config.backend)
     request = min(math.ceil(config.k * config.oversample), config.max_requested)
     rounds, t_topk, t_recover = 0, 0.0, 0.0
@@ -151,13 +172,22 @@ def plan_abstract(
         t1 = time.perf_counter()
         unique: dict[object, AbstractPlan] = {}
         cache: dict[GroundAction, tuple[Atom, ...]] = {}
-        for actions, cost in zip(result.plans, result.costs, strict=True):
+        for planned, cost in zip(result.plans, result.costs, strict=True):
+            originals = [task.original(a) for a in planned]
+            actions = tuple(a for a, _ in originals)
             stream_plan, first_use = recover_stream_plan(
-                actions, domain, problem, inst, cache=cache
+                actions,
+                domain,
+                problem,
+                inst,
+                cache=cache,
+                streams=streams,
+                preconditions=[f for _, f in originals] if task.variants else None,
             )
             key = canonical_key(actions, stream_plan)
             if key not in unique:
-                unique[key] = AbstractPlan(actions, stream_plan, cost, first_use)
+                real = cost / task.cost_scale if task.cost_scale != 1.0 else cost
+                unique[key] = AbstractPlan(actions, stream_plan, real, first_use)
         t_recover += time.perf_counter() - t1
         message = (
             f"{config.backend}: {len(result.plans)} plans in {result.seconds:.1f} s, "

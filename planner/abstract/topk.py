@@ -7,6 +7,7 @@ its own temporary directory, since both write intermediate files into the workin
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
 import signal
@@ -102,44 +103,94 @@ class TopKPlanner(ABC):
 
 
 class KStarPlanner(TopKPlanner):
-    """K* (Katz et al.) from ``kstar-planner``: top-k with the lmcut heuristic."""
+    """K* (Katz et al.) from ``kstar-planner``: top-k with the lmcut heuristic.
+
+    lmcut supports neither axioms nor conditional effects. A task that declares ADL or
+    derived predicates is therefore translated first; if its translation has axioms or
+    conditional effects, the search runs with the blind heuristic (admissible, so the plans
+    still come cheapest first), else with lmcut as usual. A STRIPS task runs in one call.
+    """
 
     name = "kstar"
+    SYMMETRIES = (
+        "sym=structural_symmetries(time_bound=0,search_symmetries=oss,"
+        "stabilize_initial_state=false,keep_operator_symmetries=true)"
+    )
 
     def _plan(
         self, work: Path, k: int, timeout_s: float
     ) -> tuple[list[tuple[GroundAction, ...]], list[float]]:
-        import json
-
         import kstar_planner
 
         build = Path(kstar_planner.__file__).parent / "builds" / "release" / "bin"
         out = work / "plans.json"
+        driver = [sys.executable, "-B", "-m", "kstar_planner.driver.main", "--build", str(build)]
+        inputs = ["domain.pddl", "problem.pddl"]
+        heuristic = "lmcut"
+        remaining = timeout_s
+        if _declares_adl((work / "domain.pddl").read_text(encoding="utf-8")):
+            started = time.perf_counter()
+            translate = [
+                sys.executable,
+                "-B",
+                str(build / "translate" / "translate.py"),
+                "domain.pddl",
+                "problem.pddl",
+                "--sas-file",
+                "output.sas",
+            ]
+            proc = self._run(translate, work, timeout_s)
+            sas = work / "output.sas"
+            if proc.returncode != 0 or not sas.is_file():
+                self._fail(proc, 0)
+            if not sas_supports_lmcut(sas.read_text(encoding="utf-8")):
+                heuristic = "blind"
+            inputs = ["output.sas"]
+            remaining = max(timeout_s - (time.perf_counter() - started), 1e-3)
+            log.info("kstar: the translated task needs %s", heuristic)
         search = (
-            f"kstar(lmcut(transform=undo_to_origin()), k={k}, find_unordered_plans=false, "
+            f"kstar({heuristic}(transform=undo_to_origin()), k={k}, find_unordered_plans=false, "
             f"dump_plan_files=false, json_file_to_dump={out}, symmetries=sym)"
         )
-        cmd = [
-            sys.executable,
-            "-B",
-            "-m",
-            "kstar_planner.driver.main",
-            "--build",
-            str(build),
-            "domain.pddl",
-            "problem.pddl",
-            "--symmetries",
-            "sym=structural_symmetries(time_bound=0,search_symmetries=oss,"
-            "stabilize_initial_state=false,keep_operator_symmetries=true)",
-            "--search",
-            search,
-        ]
-        proc = self._run(cmd, work, timeout_s)
+        cmd = [*driver, *inputs, "--symmetries", self.SYMMETRIES, "--search", search]
+        proc = self._run(cmd, work, remaining)
         raw = json.loads(out.read_text()) if out.is_file() and out.stat().st_size else {}
         plans = [tuple(GroundAction.parse(a) for a in p["actions"]) for p in raw.get("plans", [])]
         costs = [float(p["cost"]) for p in raw.get("plans", [])]
         self._fail(proc, len(plans))
         return plans, costs
+
+
+_ADL_REQUIREMENTS = frozenset({":adl", ":derived-predicates", ":conditional-effects"})
+
+
+def _declares_adl(domain_pddl: str) -> bool:
+    """Whether the domain's requirements ask for more than STRIPS with costs."""
+    start = domain_pddl.find("(:requirements")
+    if start < 0:
+        return False
+    end = domain_pddl.find(")", start)
+    return bool(set(domain_pddl[start:end].lower().split()) & _ADL_REQUIREMENTS)
+
+
+def sas_supports_lmcut(sas: str) -> bool:
+    """Whether a Fast Downward translation has neither axioms nor conditional effects."""
+    lines = sas.splitlines()
+    i = 0
+    while i < len(lines):
+        line = lines[i].strip()
+        if line == "begin_rule":
+            return False
+        if line == "begin_operator":
+            prevail = int(lines[i + 2])
+            j = i + 3 + prevail
+            for effect in lines[j + 1 : j + 1 + int(lines[j])]:
+                if int(effect.split()[0]) > 0:
+                    return False
+            i = j + 1 + int(lines[j])
+            continue
+        i += 1
+    return True
 
 
 class SymKPlanner(TopKPlanner):

@@ -137,7 +137,5 @@ class LoadedDomain:
 
     @property
     def fluents(self) -> frozenset[str]:
-        """The predicates some action adds or deletes."""
-        return frozenset(
-            a.predicate for act in self.domain.actions for a in act.add_effects + act.del_effects
-        )
+        """The predicates some action adds or deletes (conditional effects included)."""
+        return self.domain.fluent_predicates

@@ -15,7 +15,8 @@ from typing import Any
 
 from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan, symbolic_states
-from planner.pddl.structs import Atom, Domain, Problem
+from planner.pddl.semantics import Universe
+from planner.pddl.structs import Atom, Domain, FunctionTerm, Problem
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
 
@@ -34,17 +35,66 @@ class BoundPlan:
 
     skeleton: AbstractPlan
     values: Mapping[str, Any] = field(repr=False)  # object name -> value (real ones included)
+    cost: float | None = None  # the plan's cost with its bound values (see plan_cost)
 
     def value(self, name: str) -> Any:
         return self.values[name]
+
+
+def plan_states(plan: AbstractPlan, domain: Domain, problem: Problem) -> list[frozenset[Atom]]:
+    """The fluent state before each action of ``plan`` and after the last, its conditional
+    effects evaluated with the facts its streams certify."""
+    if not any(domain.action(a.name).effects for a in plan.actions):
+        return symbolic_states(plan.actions, domain, problem.init)
+    universe = Universe.of_problem(
+        domain, problem, (o for inst in plan.stream_plan for o in inst.typed_outputs)
+    )
+    certified = {a for inst in plan.stream_plan if inst.kind != "predicate" for a in inst.certified}
+    return symbolic_states(
+        plan.actions, domain, problem.init, universe=universe, certified=certified
+    )
 
 
 def stream_contexts(plan: AbstractPlan, domain: Domain, problem: Problem) -> list[frozenset[Atom]]:
     """For each stream of the plan, the symbolic state before the first action that needs it."""
     if not plan.first_use:
         raise ValueError("the plan carries no first-use steps (build it with plan_abstract)")
-    states = symbolic_states(plan.actions, domain, problem.init)
+    states = plan_states(plan, domain, problem)
     return [states[step] for step in plan.first_use]
+
+
+class PlanCostError(ValueError):
+    """A bound plan's cost cannot be computed (a cost term has no value)."""
+
+
+def plan_cost(
+    plan: AbstractPlan,
+    domain: Domain,
+    problem: Problem,
+    values: Mapping[str, Any],
+    runtime: StreamRuntime | None = None,
+) -> float:
+    """The cost of ``plan`` once its objects are bound to ``values``: each action's number
+    plus its function terms, valued from the problem's ``:init`` or by the stream file's
+    Python function on the bound values. Without action costs, the number of actions."""
+    if not domain.uses_action_costs:
+        return float(len(plan.actions))
+    total = 0.0
+    functions = set(runtime.function_names) if runtime is not None else set()
+    for action in plan.actions:
+        schema = domain.action(action.name)
+        mapping = dict(zip(schema.param_names, action.args, strict=True))
+        total += schema.cost or 0.0
+        for term in schema.cost_terms:
+            ground: FunctionTerm = term.substitute(mapping)
+            if ground in problem.function_values:
+                total += problem.function_values[ground]
+            elif runtime is not None and ground.name in functions:
+                inputs = tuple(values.get(a, problem.values.get(a, a)) for a in ground.args)
+                total += runtime.evaluate(ground.name, inputs)
+            else:
+                raise PlanCostError(f"{action}: the cost {ground} has no value")
+    return total
 
 
 def bind_sequentially(
@@ -84,5 +134,7 @@ def bind_sequentially(
                 log.info("restart %d: stream %d %s failed %d times", restart, i, inst, attempts)
                 break
         else:
-            return BoundPlan(plan, values), queries
+            return BoundPlan(
+                plan, values, plan_cost(plan, domain, problem, values, runtime)
+            ), queries
     return None, queries

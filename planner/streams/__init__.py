@@ -5,11 +5,13 @@ from planner.streams.adapters import (
     StreamAdapter,
     StreamContext,
     from_fn,
+    from_function,
     from_gen_fn,
     from_test,
 )
 from planner.streams.runtime import (
     BoundStream,
+    FunctionValueError,
     QueryResult,
     StreamBindingError,
     StreamRuntime,
@@ -19,6 +21,7 @@ from planner.streams.runtime import (
 __all__ = [
     "BoundStream",
     "Failure",
+    "FunctionValueError",
     "QueryResult",
     "StreamAdapter",
     "StreamBindingError",
@@ -26,6 +29,7 @@ __all__ = [
     "StreamRuntime",
     "bind_streams",
     "from_fn",
+    "from_function",
     "from_gen_fn",
     "from_test",
 ]

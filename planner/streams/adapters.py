@@ -6,10 +6,15 @@ Three kinds, as in PDDLStream's ``from_fn``/``from_gen_fn``/``from_test``:
 - :func:`from_gen_fn`: ``gen_fn(*inputs) -> Iterator[tuple]``; every query takes the next item
   of one generator per input binding; an exhausted generator is a failed query.
 - :func:`from_test`: ``test(*inputs) -> bool``; a stream with no outputs (a false test may
-  return a :class:`Failure` to say why).
+  return a :class:`Failure` to say why), or a lazily evaluated ``(:predicate ...)`` (its
+  query succeeds when the test says false).
+- :func:`from_function`: ``fn(*inputs) -> float``; a ``(:function ...)`` of the stream file,
+  with the lower bound planning uses while its inputs are not bound.
 
 A sampler that finds nothing may return (or yield) :class:`Failure` instead of ``None`` to say
-why; the reason is recorded with the failed query.
+why; the reason is recorded with the failed query. A stream that declares ``:fluents`` gets
+``fluents=`` too: the facts of those predicates that hold where its outputs are needed, as
+tuples ``(predicate, value, ...)`` of the objects' values.
 """
 
 from __future__ import annotations
@@ -20,8 +25,9 @@ from typing import Any, Literal
 
 from planner.pddl.structs import Atom
 
-AdapterKind = Literal["fn", "gen", "test"]
+AdapterKind = Literal["fn", "gen", "test", "function"]
 Outputs = tuple[Any, ...]
+FluentFact = tuple[Any, ...]  # (predicate, value of each argument)
 
 
 @dataclass(frozen=True)
@@ -47,6 +53,16 @@ class StreamContext:
         """Arguments of every fact of ``predicate`` in the state."""
         return [a.args for a in self.state if a.predicate == predicate]
 
+    def fluent_facts(self, predicates: tuple[str, ...]) -> list[FluentFact]:
+        """The facts of ``predicates`` in the state, as ``(predicate, value, ...)`` with each
+        object's value (its name where it has none), in a fixed order."""
+        wanted = set(predicates)
+        return [
+            (a.predicate, *(self.values.get(x, x) for x in a.args))
+            for a in sorted(self.state)
+            if a.predicate in wanted
+        ]
+
 
 @dataclass
 class StreamAdapter:
@@ -59,29 +75,57 @@ class StreamAdapter:
     kind: AdapterKind
     fn: Callable[..., Any]
     uses_context: bool = False
+    lower_bound: float = 0.0  # functions only: the value planning assumes before binding
     _generators: dict[Hashable, Iterator[Any]] = field(default_factory=dict, repr=False)
 
-    def _call(self, inputs: tuple[Any, ...], context: StreamContext | None) -> Any:
+    def __post_init__(self) -> None:
+        if self.lower_bound < 0:
+            raise ValueError(f"a lower bound must not be negative, got {self.lower_bound}")
+
+    def _call(
+        self,
+        inputs: tuple[Any, ...],
+        context: StreamContext | None,
+        fluents: list[FluentFact] | None = None,
+    ) -> Any:
+        kwargs: dict[str, Any] = {}
         if self.uses_context:
-            return self.fn(*inputs, context=context)
-        return self.fn(*inputs)
+            kwargs["context"] = context
+        if fluents is not None:
+            kwargs["fluents"] = fluents
+        return self.fn(*inputs, **kwargs)
+
+    def test(
+        self,
+        inputs: tuple[Any, ...],
+        context: StreamContext | None = None,
+        fluents: list[FluentFact] | None = None,
+    ) -> bool:
+        """A test's answer."""
+        return bool(self._call(inputs, context, fluents))
 
     def next_outputs(
-        self, inputs: tuple[Any, ...], key: Hashable, context: StreamContext | None = None
+        self,
+        inputs: tuple[Any, ...],
+        key: Hashable,
+        context: StreamContext | None = None,
+        fluents: list[FluentFact] | None = None,
     ) -> Outputs | Failure | None:
         """One query: the outputs, or ``None`` / a :class:`Failure` for a failure. May raise
-        (the runtime records it)."""
+        (the runtime records it). ``fluents`` goes to a sampler that declares ``:fluents``."""
+        if self.kind == "function":
+            raise TypeError("a function is evaluated, not queried")
         if self.kind == "test":
-            verdict = self._call(inputs, context)
+            verdict = self._call(inputs, context, fluents)
             if isinstance(verdict, Failure):
                 return verdict
             return () if bool(verdict) else None
         if self.kind == "fn":
-            out = self._call(inputs, context)
+            out = self._call(inputs, context, fluents)
             return out if out is None or isinstance(out, Failure) else tuple(out)
         gen = self._generators.get(key)
         if gen is None:
-            gen = iter(self._call(inputs, context))
+            gen = iter(self._call(inputs, context, fluents))
             self._generators[key] = gen
         try:
             out = next(gen)
@@ -109,3 +153,10 @@ def from_gen_fn(gen_fn: Callable[..., Any], *, context: bool = False) -> StreamA
 def from_test(test: Callable[..., bool | Failure], *, context: bool = False) -> StreamAdapter:
     """A boolean test for a stream with no outputs (a :class:`Failure` is false, with a reason)."""
     return StreamAdapter("test", test, uses_context=context)
+
+
+def from_function(fn: Callable[..., float], *, lower_bound: float = 0.0) -> StreamAdapter:
+    """A numeric function of bound inputs (a ``(:function ...)``): ``fn(*inputs) -> float``,
+    non-negative. Planning uses ``lower_bound`` (default 0, PDDLStream's) where an input is
+    not bound yet, and ``fn``'s value where every input is."""
+    return StreamAdapter("function", fn, lower_bound=lower_bound)

@@ -8,8 +8,8 @@ from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
-from planner.pddl.structs import Stream, StreamSet
-from planner.streams.adapters import Failure, Outputs, StreamAdapter, StreamContext
+from planner.pddl.structs import Stream, StreamFunction, StreamSet
+from planner.streams.adapters import Failure, Outputs, StreamAdapter, StreamContext, from_test
 
 log = logging.getLogger(__name__)
 
@@ -21,6 +21,10 @@ class StreamBindingError(Exception):
         self.stream = stream
         self.file = file
         super().__init__(message)
+
+
+class FunctionValueError(ValueError):
+    """A stream function returned something that is not a non-negative number."""
 
 
 @runtime_checkable
@@ -61,43 +65,90 @@ class BoundStream:
     adapter: StreamAdapter
 
 
+def _rule_test(*inputs: Any) -> bool:
+    """A rule's test: its certified facts follow from its domain, always."""
+    return True
+
+
 def bind_streams(streams: StreamSet, bindings: Mapping[str, StreamAdapter]) -> StreamRuntime:
-    """Check that declarations and bindings match one to one, then build the runtime."""
-    for name in streams.names:
+    """Check that declarations and bindings match one to one, then build the runtime.
+
+    Streams, lazily evaluated predicates and functions each need a binding (a predicate a
+    boolean test, a function :func:`~planner.streams.adapters.from_function`); rules need none.
+    """
+    needed = streams.binding_names
+    for name in needed:
         if name not in bindings:
             raise StreamBindingError(
                 f"{streams.source}: stream {name!r} is declared but has no Python binding",
                 stream=name,
                 file=streams.source,
             )
+    rules = {s.name for s in streams.streams if s.kind == "rule"}
+    declared = set(needed)
     for name, adapter in bindings.items():
-        if name not in streams.names:
+        if name in rules:
+            raise StreamBindingError(
+                f"{streams.source}: {name!r} is a rule; rules need no Python binding",
+                stream=name,
+                file=streams.source,
+            )
+        if name not in declared:
             raise StreamBindingError(
                 f"a binding is given for stream {name!r}, but {streams.source} declares no such "
-                f"stream (declared: {', '.join(streams.names)})",
+                f"stream (declared: {', '.join(needed)})",
                 stream=name,
                 file=streams.source,
             )
-        decl = streams.stream(name)
-        if adapter.kind == "test" and not decl.is_test:
-            raise StreamBindingError(
-                f"{streams.source}: stream {name!r} has outputs "
-                f"{' '.join(decl.output_names)} but is bound to a boolean test",
-                stream=name,
-                file=streams.source,
-            )
-    return StreamRuntime({n: BoundStream(streams.stream(n), bindings[n]) for n in streams.names})
+        _check_kind(streams, name, adapter)
+    bound = {
+        s.name: BoundStream(s, bindings[s.name] if s.kind != "rule" else from_test(_rule_test))
+        for s in streams.streams
+    }
+    functions = {f.name: (f, bindings[f.name]) for f in streams.functions}
+    return StreamRuntime(bound, functions)
+
+
+def _check_kind(streams: StreamSet, name: str, adapter: StreamAdapter) -> None:
+    def refuse(message: str) -> StreamBindingError:
+        return StreamBindingError(f"{streams.source}: {message}", stream=name, file=streams.source)
+
+    if name in {f.name for f in streams.functions}:
+        if adapter.kind != "function":
+            raise refuse(f"{name!r} is a (:function ...); bind it with from_function")
+        return
+    if adapter.kind == "function":
+        raise refuse(f"{name!r} is a stream, not a (:function ...); from_function is for those")
+    decl = streams.stream(name)
+    if decl.kind == "predicate" and adapter.kind != "test":
+        raise refuse(f"{name!r} is a (:predicate ...); bind it to a boolean test (from_test)")
+    if adapter.kind == "test" and not decl.is_test:
+        raise refuse(
+            f"stream {name!r} has outputs {' '.join(decl.output_names)} but is bound to a "
+            "boolean test"
+        )
 
 
 class StreamRuntime:
-    """Answers stream queries; a sampler that raises is a failed query, never a crash."""
+    """Answers stream queries; a sampler that raises is a failed query, never a crash.
 
-    def __init__(self, streams: Mapping[str, BoundStream]) -> None:
+    Also evaluates the stream file's numeric functions (:meth:`evaluate`)."""
+
+    def __init__(
+        self,
+        streams: Mapping[str, BoundStream],
+        functions: Mapping[str, tuple[StreamFunction, StreamAdapter]] | None = None,
+    ) -> None:
         self._streams = dict(streams)
+        self._functions = dict(functions or {})
 
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(self._streams)
+
+    @property
+    def function_names(self) -> tuple[str, ...]:
+        return tuple(self._functions)
 
     def declaration(self, name: str) -> Stream:
         return self._bound(name).declaration
@@ -108,6 +159,31 @@ class StreamRuntime:
         except KeyError:
             raise KeyError(f"unknown stream {name!r} (known: {', '.join(self._streams)})") from None
 
+    def _function(self, name: str) -> tuple[StreamFunction, StreamAdapter]:
+        try:
+            return self._functions[name]
+        except KeyError:
+            known = ", ".join(self._functions) or "none"
+            raise KeyError(f"unknown function {name!r} (known: {known})") from None
+
+    def lower_bound(self, name: str) -> float:
+        """What planning assumes function ``name`` is worth before its inputs are bound."""
+        return self._function(name)[1].lower_bound
+
+    def evaluate(self, name: str, inputs: tuple[Any, ...]) -> float:
+        """The value of function ``name`` on bound input values (non-negative)."""
+        decl, adapter = self._function(name)
+        if len(inputs) != len(decl.inputs):
+            raise ValueError(
+                f"function {name} takes {len(decl.inputs)} inputs, {len(inputs)} were given"
+            )
+        value = adapter.fn(*inputs)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise FunctionValueError(f"function {name} returned {value!r}, not a number")
+        if value < 0 or value != value:
+            raise FunctionValueError(f"function {name} returned {value}; costs are non-negative")
+        return float(value)
+
     def query(
         self,
         name: str,
@@ -116,23 +192,37 @@ class StreamRuntime:
         key: Hashable = None,
         context: StreamContext | None = None,
     ) -> QueryResult:
-        """Query stream ``name`` once on input values; ``key`` identifies the input binding."""
+        """Query stream ``name`` once on input values; ``key`` identifies the input binding.
+
+        A lazily evaluated predicate succeeds when its test says false (planning assumed it
+        false); a rule always succeeds."""
         bound = self._bound(name)
         decl = bound.declaration
         if len(inputs) != len(decl.inputs):
             raise ValueError(
                 f"stream {name} takes {len(decl.inputs)} inputs, {len(inputs)} were given"
             )
+        fluents = None
+        if decl.fluents:
+            fluents = context.fluent_facts(decl.fluents) if context is not None else []
         t_wall, t_cpu = time.perf_counter(), time.process_time()
         error: str | None = None
         reason: str | None = None
         outputs: Outputs | None
         try:
-            answer = bound.adapter.next_outputs(inputs, key if key is not None else inputs, context)
-            if isinstance(answer, Failure):
-                outputs, reason = None, str(answer.reason)  # stored as text, whatever it was
+            if decl.kind == "predicate":
+                holds = bound.adapter.test(inputs, context)
+                outputs = None if holds else ()
+                if holds:
+                    reason = f"{decl.certified[0]} holds"
             else:
-                outputs = answer
+                answer = bound.adapter.next_outputs(
+                    inputs, key if key is not None else inputs, context, fluents
+                )
+                if isinstance(answer, Failure):
+                    outputs, reason = None, str(answer.reason)  # stored as text, whatever it was
+                else:
+                    outputs = answer
         except Exception as exc:  # a sampler's failure is data, not a crash
             outputs = None
             error = f"{type(exc).__name__}: {exc}"

@@ -108,10 +108,12 @@ def test_wrong_arity_and_undeclared_variable() -> None:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        ((":action-costs", ":fluents"), "requirement :fluents is not supported"),
-        (("(not (ok ?to))", "(or (ok ?to) (free ?to))"), "disjunctive preconditions"),
-        (("(at ?b ?to) (not (at", "(when (ok ?to) (ok ?to)) (not (at"), "conditional effects"),
-        (("(:functions (total-cost) - number)", "(:derived (ok ?p) (free ?p))"), ":derived"),
+        ((":action-costs", ":durative-actions"), "requirement :durative-actions is not supported"),
+        (("(not (ok ?to))", "(< (total-cost) 3)"), "numeric conditions (< ...) are not supported"),
+        (("(increase (total-cost) 3)", "(assign (total-cost) 3)"), "numeric effect 'assign'"),
+        (("(increase (total-cost) 3)", "(increase (total-cost) (+ 1 2))"), "arithmetic (+ ...)"),
+        (("(:functions (total-cost) - number)", "(:durative-action go)"), ":durative-action"),
+        (("(:functions (total-cost) - number)", "(:functions (f) - pose)"), "object fluents"),
     ],
 )
 def test_unsupported_constructs_say_so(change: tuple[str, str], message: str) -> None:
@@ -121,7 +123,9 @@ def test_unsupported_constructs_say_so(change: tuple[str, str], message: str) ->
 
 
 def test_trailing_garbage_and_empty_file() -> None:
-    assert "expected end of file" in str(error_of(MINI + "\n(extra)"))
+    err = error_of(MINI + "\n(extra)")
+    assert "closes the definition, but more follows" in str(err)
+    assert (err.line, err.column) == (11, 77)  # the ")" that closed (define ...)
     assert "empty" in str(error_of("; nothing but a comment\n"))
 
 
@@ -148,9 +152,10 @@ def test_stream_file_parses() -> None:
         (("(at ?b home)", "(free home)"), "input ?b must appear in a :domain fact"),
         (("(free ?p)", "(free ?q)"), "variable ?q is not declared in stream sample-free"),
         (("(free ?p)", "(cooked ?p)"), "undeclared predicate 'cooked'"),
-        ((":outputs (?p)", ":fluents (at)"), ":fluents in stream sample-free are not supported"),
+        ((":outputs (?p)", ":outputs (?p) :fluents (free)"), "'free', which no action changes"),
+        ((":outputs (?p)", ":outputs (?p) :fluents (atx)"), "'atx', which is not declared"),
         ((":outputs (?p)", ":ouputs (?p)"), "unknown keyword :ouputs"),
-        (("(:stream sample-free", "(:function sample-free"), ":function declarations"),
+        (("(:stream sample-free", "(:optimizer sample-free"), ":optimizer declarations"),
     ],
 )
 def test_stream_errors(change: tuple[str, str], message: str) -> None:
@@ -172,3 +177,37 @@ def test_problem_errors_name_the_object() -> None:
         parse_problem("(define (problem p) (:domain other) (:goal (ok home)))", d)
     with pytest.raises(PDDLError, match=r"expected a \(:goal"):
         parse_problem("(define (problem p) (:domain mini) (:init))", d)
+
+
+def test_costs_without_declaring_total_cost_as_pddlstream_writes_them() -> None:
+    text = MINI.replace("(:functions (total-cost) - number)", "(:functions (dist ?a ?b))")
+    text = text.replace("(increase (total-cost) 3)", "(increase (total-cost) (dist ?from ?to))")
+    d = parse_domain(text, file="pddlstream.pddl")
+    assert d.uses_action_costs and d.action("move").cost_terms[0].name == "dist"
+    assert "(:functions (total-cost) - number (dist ?a - object ?b - object) - number)" in (
+        write_domain(d)
+    )
+
+
+def test_function_terms_are_checked_in_costs_and_values() -> None:
+    text = MINI.replace("(:functions (total-cost) - number)", "(:functions (dist ?a ?b))")
+    err = error_of(text.replace("(increase (total-cost) 3)", "(increase (total-cost) (dst ?to))"))
+    assert "undeclared function 'dst' in action move" in str(err)
+    err = error_of(text.replace("(increase (total-cost) 3)", "(increase (total-cost) (dist ?to))"))
+    assert "function 'dist' takes 2 arguments but 1 are given" in str(err)
+    d = parse_domain(text)
+
+    def problem(init: str) -> PDDLError:
+        with pytest.raises(PDDLError) as info:
+            parse_problem(
+                f"(define (problem p) (:domain mini) (:objects a - block x - pose)\n"
+                f"  (:init {init}) (:goal (at a home)))",
+                d,
+                file="p.pddl",
+            )
+        return info.value
+
+    assert "function 'dist' takes 2 arguments" in str(problem("(= (dist x) 1)"))
+    assert "expected a non-negative number, not '-1'" in str(problem("(= (dist x home) -1)"))
+    assert "given a value twice" in str(problem("(= (dist x home) 1) (= (dist x home) 2)"))
+    assert "unknown object or constant 'y'" in str(problem("(= (dist x y) 1)"))

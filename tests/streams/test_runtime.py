@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import random
 from collections.abc import Iterator
 
 import pytest
@@ -112,3 +113,73 @@ def test_a_sampler_may_say_why_it_found_nothing(line: LoadedDomain) -> None:
         {"sample-pose": from_fn(lambda w, r: Failure(42)), "test-reachable": from_test(bool)},  # type: ignore[arg-type]
     ).query("sample-pose", (1.0, (0.0, 1.5)))
     assert odd.reason == "42" and not odd.success
+
+
+# --- the stream file's other declarations (issue 27) ------------------------------------------
+
+
+def test_a_lazy_predicate_succeeds_when_its_test_says_false() -> None:
+    from tests.pddl.domains import Block, load
+
+    case = load("predicate")
+    rt = case.runtime(0)
+    a, b = Block("a"), Block("b")
+    apart = rt.query("collide", (a, 20.5, b, 22.0))
+    assert apart.success and apart.outputs == ()
+    overlapping = rt.query("collide", (a, 20.5, b, 21.0))
+    assert not overlapping.success
+    assert overlapping.reason == "(collide ?b ?p ?b2 ?p2) holds" and overlapping.error is None
+
+
+def test_a_rule_needs_no_binding_and_always_holds() -> None:
+    from tests.pddl.domains import load
+
+    case = load("rule")
+    rt = case.runtime(0)
+    assert "rule-1" in rt.names
+    assert rt.query("rule-1", ("a", 21.0, (20.0, 24.0))).success
+    with pytest.raises(StreamBindingError, match="'rule-1' is a rule; rules need no Python"):
+        bind_streams(
+            case.streams,
+            {**case.make_bindings(random.Random(0), []), "rule-1": from_test(bool)},
+        )
+
+
+def test_functions_bind_with_from_function_and_check_their_values() -> None:
+    from planner.streams import FunctionValueError, from_function
+    from tests.pddl.domains import load
+
+    case = load("functions")
+    bindings = dict(case.make_bindings(random.Random(0), []))
+    rt = bind_streams(case.streams, bindings)
+    assert rt.evaluate("dist", (1.0, 3.5)) == 2.5
+    assert rt.lower_bound("dist") == 0.5
+    with pytest.raises(StreamBindingError, match="bind it with from_function"):
+        bind_streams(case.streams, {**bindings, "dist": from_fn(lambda a, b: (1.0,))})
+    with pytest.raises(StreamBindingError, match="from_function is for those"):
+        bind_streams(case.streams, {**bindings, "sample-view": from_function(abs)})
+    negative = bind_streams(case.streams, {**bindings, "dist": from_function(lambda a, b: -1.0)})
+    with pytest.raises(FunctionValueError, match="costs are non-negative"):
+        negative.evaluate("dist", (0.0, 1.0))
+    with pytest.raises(ValueError, match="must not be negative"):
+        from_function(abs, lower_bound=-1.0)
+
+
+def test_a_stream_with_fluents_receives_the_facts_of_its_context() -> None:
+    from planner.pddl import Atom
+    from planner.streams import StreamContext
+    from tests.pddl.domains import Block, load
+
+    case = load("fluents")
+    log: list[tuple[str, tuple[object, ...], object]] = []
+    rt = case.runtime(0, log)
+    a, b = Block("a"), Block("b")
+    state = frozenset({Atom("at", ("a", "opt-p1")), Atom("at", ("c", "x0-c")), Atom("hand-empty")})
+    context = StreamContext(state, {"a": a, "c": Block("c"), "opt-p1": 21.0, "x0-c": 5.0})
+    result = rt.query("sample-free-pose", (b, (20.0, 23.5)), context=context)
+    assert result.success
+    (seen,) = [entry[2] for entry in log]
+    assert seen == [("at", a, 21.0), ("at", Block("c"), 5.0)]  # only (at ...), with values
+    assert abs(result.outputs[0] - 21.0) >= 1.0  # the sampler kept clear of a
+    rt.query("sample-free-pose", (b, (20.0, 23.5)))  # no context: no facts
+    assert log[-1][2] == []

@@ -1,0 +1,10 @@
+(define (problem fluents-3)
+  (:domain fluents)
+  (:objects a b c - block x0-a x0-b x0-c - pose start goal - region)
+  (:init
+    (movable a) (movable b) (movable c) (region start) (region goal)
+    (pose a x0-a) (pose b x0-b) (pose c x0-c)
+    (contained a x0-a start) (contained b x0-b start) (contained c x0-c start)
+    (at a x0-a) (at b x0-b) (at c x0-c) (in a start) (in b start) (in c start)
+    (hand-empty))
+  (:goal (and (in a goal) (in b goal) (in c goal))))

@@ -1,0 +1,6 @@
+(define (problem functions-2)
+  (:domain functions)
+  (:objects a b - block q0 - conf)
+  (:init (block a) (block b) (conf q0) (at-conf q0))
+  (:goal (and (seen a) (seen b)))
+  (:metric minimize (total-cost)))

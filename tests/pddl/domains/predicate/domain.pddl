@@ -1,0 +1,33 @@
+; As the derived domain, but the collision check is a lazily evaluated predicate of the
+; stream file ((:predicate (collide ...) ...)): planning assumes no collision, and each
+; collision the plan relies on being absent is tested once bound.
+(define (domain predicate)
+  (:requirements :strips :typing :negative-preconditions :equality :derived-predicates
+                 :existential-preconditions)
+  (:types block pose region)
+  (:predicates
+    (movable ?b - block)
+    (region ?r - region)
+    (pose ?b - block ?p - pose)
+    (contained ?b - block ?p - pose ?r - region)
+    (collide ?b - block ?p - pose ?b2 - block ?p2 - pose)
+    (at ?b - block ?p - pose)
+    (in ?b - block ?r - region)
+    (holding ?b - block)
+    (hand-empty)
+    (unsafe ?b - block ?p - pose))
+
+  (:derived (unsafe ?b - block ?p - pose)
+    (exists (?b2 - block ?p2 - pose)
+      (and (at ?b2 ?p2) (not (= ?b ?b2)) (collide ?b ?p ?b2 ?p2))))
+
+  (:action pick
+    :parameters (?b - block ?p - pose ?r - region)
+    :precondition (and (at ?b ?p) (in ?b ?r) (hand-empty))
+    :effect (and (holding ?b) (not (at ?b ?p)) (not (in ?b ?r)) (not (hand-empty))))
+
+  (:action place
+    :parameters (?b - block ?p - pose ?r - region)
+    :precondition (and (holding ?b) (contained ?b ?p ?r) (not (unsafe ?b ?p)))
+    :effect (and (at ?b ?p) (in ?b ?r) (hand-empty) (not (holding ?b))))
+)
