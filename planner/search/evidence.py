@@ -81,9 +81,10 @@ class Evidence:
         """Whether any outcome is known (nothing to update otherwise)."""
         return bool(self.counts) if self.pooled else True
 
-    def refresh(self, tree: Tree) -> None:
+    def refresh(self, tree: Tree) -> set[str]:
         """Dead ends, then the outcomes of every query made (outcomes only, never measured
-        seconds: the same seed makes the same search)."""
+        seconds: the same seed makes the same search); returns the queries whose outcomes
+        changed."""
         self.dead = self._dead_ends(tree) if self.dead_ends else set()
         counts: dict[str, tuple[int, int]] = {}
         for key, makers in self.groups.items():
@@ -96,7 +97,11 @@ class Evidence:
                         failed += 1
             if ok or failed:
                 counts[key] = (ok, failed)
+        changed = {
+            k for k in counts.keys() | self.counts.keys() if counts.get(k) != self.counts.get(k)
+        }
         self.counts = counts
+        return changed
 
     # --- dead ends ---------------------------------------------------------------------------
 

@@ -17,6 +17,7 @@ protocol, so this module needs no torch.
 
 from __future__ import annotations
 
+import heapq
 import math
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
@@ -291,6 +292,15 @@ class LearnedPolicy:
     # on; a child's rows that its new binding leaves alone are taken from here.
     _entries: dict[int, list[_Entry]] = field(default_factory=dict)
     _names: list[list[frozenset[str]]] = field(default_factory=list)  # row_names per plan
+    # Incremental estimates: each node's Q as of the last refresh, the nodes whose Q or estimate
+    # may have changed since, the nodes that read each query's outcomes or each reuse identity,
+    # and how many nodes the refreshes have seen.
+    _qmemo: dict[int, float] = field(default_factory=dict)
+    _dirty: set[int] = field(default_factory=set)
+    _by_key: dict[str, set[int]] = field(default_factory=dict)
+    _by_ident: dict[str, set[int]] = field(default_factory=dict)
+    _seen: int = 0
+    _any: bool = False  # whether any outcome was known at the last refresh
 
     def __post_init__(self) -> None:
         c = self.config
@@ -416,6 +426,10 @@ class LearnedPolicy:
             ours = [cost for _, cost, _ in entries]
             self._terms[node.id] = list(zip(keys, ours, strict=True))
             self._idents[node.id] = [ident for _, _, ident in entries]
+            for key in {k for k in keys if k is not None}:
+                self._by_key.setdefault(key, set()).add(node.id)
+            for ident in {i for _, _, i in entries if i is not None}:
+                self._by_ident.setdefault(ident, set()).add(node.id)
             if keys and keys[0] is not None:  # the node's children are attempts of this query
                 self.evidence.add_maker(keys[0], node.id)
             if self.config.bound_execution:
@@ -485,7 +499,16 @@ class LearnedPolicy:
         trajectories already bound on its path (bound_execution), plus Eq. 4 over the
         predictions (made once per node), each term updated by the outcomes of the same query
         already made (attempt_posterior, pooled_evidence), as counted at the last refresh, and
-        calibrated by the children the node already has (calibration)."""
+        calibrated by the children the node already has (calibration). Remembered until
+        something it reads changes (:meth:`_refresh` finds what)."""
+        memo = self._qmemo.get(node.id)
+        if memo is not None and node.id not in self._dirty:
+            return memo
+        value = self._q_now(tree, node)
+        self._qmemo[node.id] = value
+        return value
+
+    def _q_now(self, tree: Tree, node: Node) -> float:
         self._predict(tree, [node])
         shift = self._calibration(tree, node) if self.config.calibration else 0.0
         if not self.config.attempt_posterior or not self.evidence.any:
@@ -518,31 +541,69 @@ class LearnedPolicy:
         """Count the outcomes of every query made and find the dead ends
         (:class:`~planner.search.evidence.Evidence`), then estimate every node: the lowest Q in
         its subtree, dead ends left out (subtree_min; progress counts, and a dead end below
-        raises its Q until another branch is cheaper). Children come after their parents, so
-        one pass from the last id does it."""
-        self._predict(tree, [n for n in tree.nodes[1:] if n.success])
+        raises its Q until another branch is cheaper).
+
+        Incremental: only the nodes something changed for since the last refresh are
+        estimated again (new nodes and their parents, nodes that read a query whose outcomes
+        changed or a result newly reusable, nodes that became or stopped being dead ends and
+        their parents), then their ancestors while their estimates change. Children come after
+        their parents, so one pass down the ids does it."""
+        dirty = self._dirty
+        new = tree.nodes[max(self._seen, 1) :]
+        self._seen = len(tree.nodes)
+        self._predict(tree, [n for n in new if n.success])
+        for node in new:
+            dirty.add(node.id)
+            if node.parent is not None:
+                dirty.add(node.parent)
         if self.config.reuse_in_q:
-            self._learn_results(tree)
-        self.evidence.refresh(tree)
+            for node_id in self._learn_results(tree):
+                dirty.add(node_id)
+                parent = tree[node_id].parent
+                if parent is not None:
+                    dirty.add(parent)
+        before_dead = self.dead
+        changed = self.evidence.refresh(tree)
         dead = self.dead
-        est: dict[int, float] = {}
-        for node in reversed(tree.nodes[1:]):
-            if not node.success:
+        for node_id in before_dead ^ dead:
+            dirty.add(node_id)
+            parent = tree[node_id].parent
+            if parent is not None:
+                dirty.add(parent)
+        for key in changed:
+            dirty.update(self._by_key.get(key, ()))
+        if self.evidence.any != self._any:
+            self._any = self.evidence.any
+            dirty.update(n.id for n in tree.nodes[1:])
+        est = self._est
+        todo = sorted(dirty, reverse=True)
+        queued = set(todo)
+        heap = [-n for n in todo]
+        heapq.heapify(heap)
+        while heap:
+            node = tree[-heapq.heappop(heap)]
+            queued.discard(node.id)
+            if not node.success or node.id == ROOT:
                 continue
+            old = est.get(node.id)
             best = self.q(tree, node)
+            dirty.discard(node.id)
             if node.id in dead:  # every continuation is taken to fail: going on costs 1 / 0.05 x
-                est[node.id] = with_dead_ends(best, 0.0)
-                continue
-            if self.config.subtree_min:
+                best = with_dead_ends(best, 0.0)
+            elif self.config.subtree_min:
                 for c in node.children:  # a dead end's subtree no longer vouches for its parent
                     if c in est and c not in dead and est[c] < best:
                         best = est[c]
             est[node.id] = best
-        self._est = est
+            parent = node.parent
+            if best != old and parent is not None and parent != ROOT and parent not in queued:
+                queued.add(parent)
+                heapq.heappush(heap, -parent)
+        dirty.clear()
 
-    def _learn_results(self, tree: Tree) -> None:
+    def _learn_results(self, tree: Tree) -> list[int]:
         """Note the first success of each reusable query made since the last refresh, and
-        settle again the nodes whose streams ahead include it."""
+        settle again the nodes whose streams ahead include it; returns those nodes."""
         fresh: set[str] = set()
         for node in tree.nodes[max(self._scanned, 1) :]:
             if not node.success or node.parent is None:
@@ -553,11 +614,10 @@ class LearnedPolicy:
                 self._known[ident] = node.execution_s
                 fresh.add(ident)
         self._scanned = len(tree.nodes)
-        if not fresh:
-            return
-        for node_id, idents in self._idents.items():
-            if any(i in fresh for i in idents if i is not None):
-                self._settle(tree[node_id])
+        touched = sorted({n for i in fresh for n in self._by_ident.get(i, ())})
+        for node_id in touched:
+            self._settle(tree[node_id])
+        return touched
 
     def _relevant(self, node: Node) -> set[str]:
         """Objects the outcome of ``node``'s next query depends on: its inputs and the objects of
