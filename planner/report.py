@@ -14,7 +14,7 @@ import json
 import math
 import re
 import statistics
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -89,12 +89,83 @@ def query_summary(outcomes: Iterable[QueryOutcome]) -> dict[str, Any]:
     return dict(sorted(streams.items()))
 
 
+def time_split(
+    trials: Sequence[BenchTrialRecord],
+    plans_at: Mapping[str, float],
+    outcomes: Iterable[QueryOutcome],
+) -> dict[str, float | None]:
+    """Where a planner's planning seconds go, on average over ``trials``: until the abstract
+    plans are found (top-k, and a learned planner's model loading and stream order), the
+    stream queries' own seconds, and the rest, the search itself (selection, a learned
+    planner's feature rows and predictions, events)."""
+    ids = {t.run_id for t in trials if t.run_id and t.planning_s is not None}
+    if not ids:
+        return {"planning_s": None, "until_plans_s": None, "queries_s": None, "search_s": None}
+    query_s: dict[str, float] = dict.fromkeys(ids, 0.0)
+    for q in outcomes:
+        if q.run_id in query_s:
+            query_s[q.run_id] += q.wall_s
+    rows = [
+        (t.planning_s or 0.0, plans_at.get(t.run_id or "", 0.0), query_s[t.run_id or ""])
+        for t in trials
+        if t.run_id in ids
+    ]
+    n = len(rows)
+    planning = sum(r[0] for r in rows) / n
+    until = sum(r[1] for r in rows) / n
+    queries = sum(r[2] for r in rows) / n
+    return {
+        "planning_s": planning,
+        "until_plans_s": until,
+        "queries_s": queries,
+        "search_s": planning - until - queries,
+    }
+
+
+LEARNED = "learned"  # the planner a benchmark's variants are compared with as well
+
+
+def _pair(
+    by: Mapping[str, Mapping[int, BenchTrialRecord]],
+    planner: str,
+    reference: str,
+    budget: float,
+    rng: np.random.Generator,
+) -> dict[str, Any]:
+    """``planner`` against ``reference`` over their paired seeds: each measure's paired
+    improvement, unsolved trials counted at the budget (censored) and over the seeds both
+    solved."""
+    seeds = sorted(set(by[planner]) & set(by[reference]))
+    both = [
+        s
+        for s in seeds
+        if by[planner][s].status == "solved" and by[reference][s].status == "solved"
+    ]
+    entry: dict[str, Any] = {"seeds": len(seeds), "both_solved": len(both)}
+    for m in MEASURES:
+        # An unsolved trial has no execution to compare: execution is over both-solved seeds.
+        pool = both if m == "execution" else seeds
+        entry[f"{m}_censored"] = paired_improvement(
+            [_times(by[planner][s], budget)[m] for s in pool],
+            [_times(by[reference][s], budget)[m] for s in pool],
+            rng,
+        )
+        entry[f"{m}_both_solved"] = paired_improvement(
+            [_times(by[planner][s], budget)[m] for s in both],
+            [_times(by[reference][s], budget)[m] for s in both],
+            rng,
+        )
+    return entry
+
+
 def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
     """Everything the report shows, as JSON data (``tamp report --json``)."""
     with RunStore(db) as store:
         bench = store.get_bench(bench_id)
         trials = store.bench_trials(bench_id)
-        outcomes = store.query_outcomes([t.run_id for t in trials if t.run_id])
+        run_ids = [t.run_id for t in trials if t.run_id]
+        outcomes = store.query_outcomes(run_ids)
+        plans_at = store.event_times(run_ids, "abstract_plans_found")
     planner_of = {t.run_id: t.planner for t in trials if t.run_id}
     config = bench.config
     planners: list[str] = list(config["planners"])
@@ -119,31 +190,20 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             **{f"{m}_s": _stats([x[m] for x in times]) for m in MEASURES},  # over solved trials
             "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),
             "planning_over_oracle": _stats(ratios),
+            "time_split": time_split(
+                [t for t in ts if t.run_id], plans_at, outcomes
+            ),  # over every trial with a run
             "queries": query_summary(q for q in outcomes if planner_of.get(q.run_id) == p),
         }
     rng = np.random.default_rng(0)
     reference = planners[0]
-    paired: dict[str, Any] = {}
-    for p in planners[1:]:
-        seeds = sorted(set(by[p]) & set(by[reference]))
-        both = [
-            s for s in seeds if by[p][s].status == "solved" and by[reference][s].status == "solved"
-        ]
-        entry: dict[str, Any] = {"seeds": len(seeds), "both_solved": len(both)}
-        for m in MEASURES:
-            # An unsolved trial has no execution to compare: execution is over both-solved seeds.
-            pool = both if m == "execution" else seeds
-            entry[f"{m}_censored"] = paired_improvement(
-                [_times(by[p][s], budget)[m] for s in pool],
-                [_times(by[reference][s], budget)[m] for s in pool],
-                rng,
-            )
-            entry[f"{m}_both_solved"] = paired_improvement(
-                [_times(by[p][s], budget)[m] for s in both],
-                [_times(by[reference][s], budget)[m] for s in both],
-                rng,
-            )
-        paired[p] = entry
+    paired = {p: _pair(by, p, reference, budget, rng) for p in planners[1:]}
+    # A benchmark of variants (tamp bench --planners baseline,paper,learned,learned:x=off):
+    # every planner against learned too, the configuration the variants are ablations of.
+    against: dict[str, dict[str, Any]] = {}
+    for ref in (LEARNED,):
+        if ref in planners and ref != reference:
+            against[ref] = {p: _pair(by, p, ref, budget, rng) for p in planners if p != ref}
     rows = [
         {
             "seed": s,
@@ -173,6 +233,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
         "reference": reference,
         "planners": per_planner,
         "paired": paired,
+        "paired_against": against,
         "trials": rows,
     }
 
@@ -216,8 +277,43 @@ def table_markdown(summary: dict[str, Any]) -> str:
             f"{_fmt(b['mean'], True)} ({_fmt(b['low'], True)} to {_fmt(b['high'], True)}) over "
             f"the {b['n']} seeds both solved."
         )
+    for ref, entries in summary.get("paired_against", {}).items():
+        lines += ["", *_ablation_markdown(summary, ref, entries)]
     lines += ["", *_query_markdown(summary)]
     return "\n".join(lines)
+
+
+def _ci(e: Mapping[str, Any]) -> str:
+    return f"{_change(e['mean'])} ({_fmt(e['low'], True)} to {_fmt(e['high'], True)})"
+
+
+def _ablation_markdown(
+    summary: Mapping[str, Any], ref: str, entries: Mapping[str, Any]
+) -> list[str]:
+    """Every planner against ``ref`` (and the benchmark's reference): total, planning and
+    execution, paired, 95% intervals (the improvement is ours over theirs: "less" is better)."""
+    base = summary["reference"]
+    lines = [
+        f"| planner | solved | total vs {ref} | planning vs {ref} | execution vs {ref} | "
+        f"total vs {base} | search s |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for p, s in summary["planners"].items():
+        mine = entries.get(p)
+        vs_base = summary["paired"].get(p)
+        split = s.get("time_split", {}).get("search_s")
+        lines.append(
+            f"| {p} | {s['solved']}/{s['trials']} | "
+            + (
+                f"{_ci(mine['total_censored'])} | {_ci(mine['planning_censored'])} | "
+                f"{_ci(mine['execution_censored'])}"
+                if mine is not None
+                else "- | - | -"
+            )
+            + f" | {_ci(vs_base['total_censored']) if vs_base is not None else '-'} | "
+            + f"{_fmt(split)} |"
+        )
+    return lines
 
 
 def _kinds_text(entry: dict[str, Any], limit: int = 4) -> str:

@@ -19,6 +19,8 @@ knows of each node (:class:`NodeQueries`); it holds no policy state.
 
 from __future__ import annotations
 
+import bisect
+import heapq
 import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -60,6 +62,17 @@ class Evidence:
     counts: dict[str, tuple[int, int]] = field(default_factory=dict)  # identity -> ok, failed
     dead: set[int] = field(default_factory=set)
     _sigs: dict[int, tuple[dict[str, str], dict[str, int]]] = field(default_factory=dict)
+    # What refreshes keep up to date: nodes seen, the deepest success below each node, nodes
+    # whose children all failed, queries with a failed attempt, the nodes of each stream of
+    # each plan that query from it (and which of those groups changed), each group's culprits.
+    _seen: int = 0
+    _deepest: dict[int, int] = field(default_factory=dict)
+    _failing: set[int] = field(default_factory=set)
+    _failed_keys: set[str] = field(default_factory=set)
+    _members: dict[tuple[int, int], list[int]] = field(default_factory=dict)
+    _member_set: set[int] = field(default_factory=set)
+    _stale_groups: set[tuple[int, int]] = field(default_factory=set)
+    _culprits: dict[tuple[int, int], list[tuple[Node, set[str]]]] = field(default_factory=dict)
 
     def add_maker(self, key: str, node: int) -> None:
         """``node``'s children are attempts of the query ``key``."""
@@ -84,24 +97,72 @@ class Evidence:
     def refresh(self, tree: Tree) -> set[str]:
         """Dead ends, then the outcomes of every query made (outcomes only, never measured
         seconds: the same seed makes the same search); returns the queries whose outcomes
-        changed."""
-        self.dead = self._dead_ends(tree) if self.dead_ends else set()
-        counts: dict[str, tuple[int, int]] = {}
-        for key, makers in self.groups.items():
+        changed. Incremental: what the tree's new nodes change is updated, the rest kept."""
+        new = tree.nodes[max(self._seen, 1) :]
+        self._seen = len(tree.nodes)
+        touched: set[int] = set()  # nodes with new children: their queries' outcomes changed
+        for node in new:
+            self._grow(tree, node)
+            if node.parent is not None:
+                touched.add(node.parent)
+        before = self.dead
+        self.dead = self._dead_ends(tree, touched) if self.dead_ends else set()
+        for node_id in before ^ self.dead:
+            parent = tree[node_id].parent
+            if parent is not None:
+                touched.add(parent)
+        changed: set[str] = set()
+        for key in {k for n in touched if (k := self._maker_key(tree, n)) is not None}:
             ok = failed = 0
-            for n in makers:
+            for n in self.groups.get(key, ()):
                 for c in tree[n].children:
                     if tree[c].success and c not in self.dead:
                         ok += 1
                     else:
                         failed += 1
-            if ok or failed:
-                counts[key] = (ok, failed)
-        changed = {
-            k for k in counts.keys() | self.counts.keys() if counts.get(k) != self.counts.get(k)
-        }
-        self.counts = counts
+            now = (ok, failed) if ok or failed else None
+            if now != self.counts.get(key):
+                changed.add(key)
+                if now is None:
+                    del self.counts[key]
+                else:
+                    self.counts[key] = now
         return changed
+
+    def _maker_key(self, tree: Tree, node_id: int) -> str | None:
+        """The identity of the query ``node_id``'s children are attempts of (None: none)."""
+        if node_id == ROOT:
+            return None
+        return self.queries.key(tree[node_id])
+
+    def _grow(self, tree: Tree, node: Node) -> None:
+        """Take in a new node: the deepest success below each ancestor, which nodes have only
+        failed children, which queries have a failed attempt, which groups changed."""
+        depth = node.depth if node.success else -1
+        self._deepest[node.id] = max(self._deepest.get(node.id, -1), depth)
+        current = node.parent
+        while current is not None and self._deepest.get(current, -1) < depth:
+            self._deepest[current] = depth
+            current = tree[current].parent
+        parent = node.parent
+        if parent is None or parent == ROOT:
+            return
+        if node.success:
+            self._failing.discard(parent)
+        elif not any(tree[c].success for c in tree[parent].children):
+            self._failing.add(parent)
+        if not node.success:
+            key = self._maker_key(tree, parent)
+            if key is not None:
+                self._failed_keys.add(key)
+        maker = tree[parent]
+        if maker.success and maker.depth > 0 and self.queries.first(maker) is not None:
+            group = (maker.plan_index, maker.depth)
+            members = self._members.setdefault(group, [])
+            if maker.id not in self._member_set:
+                self._member_set.add(maker.id)
+                bisect.insort(members, maker.id)
+            self._stale_groups.add(group)
 
     # --- dead ends ---------------------------------------------------------------------------
 
@@ -109,22 +170,29 @@ class Evidence:
         prior = cost.p_prior if self.use_prior else None
         return dead_after(cost.p_s, p_prior=prior, p_min=self.p_min, p_max=self.p_max)
 
-    def _dead_ends(self, tree: Tree) -> set[int]:
-        """Nodes whose every continuation is taken to fail (see the module). A fresh attempt
-        elsewhere that has not yet reached the failing depth does not stop the pooling."""
-        deepest = _deepest(tree)
+    def _dead_ends(self, tree: Tree, touched: set[int]) -> set[int]:
+        """Nodes whose every continuation is taken to fail (see the module), to a fixpoint: a
+        new dead end fails its parent's query, which may make the parent one. A fresh attempt
+        elsewhere that has not yet reached the failing depth does not stop the pooling. Only
+        nodes with no live child can be dead ends: those whose children all failed, and the
+        parents of dead ends."""
         dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
         origin: dict[int, int] = {}  # dead node -> depth of the failures behind it
         shared = self._shared_culprits(tree) if self.shared_culprits else []
         for _ in range(MAX_ROUNDS):  # new dead ends fail their parents' queries: pool again
-            pooled = self._pooled_failures(tree, dead, origin, deepest) if self.pooled else {}
+            pooled = self._pooled_failures(tree, dead, origin) if self.pooled else {}
             before = len(dead), sum(len(r) for r in dead.values())
             for node, reason in shared:
                 if dead.get(node.id) == reason:
                     continue
                 depth = min(origin.get(c, tree[c].depth) for c in node.children)
                 _mark(tree, dead, origin, node, reason, depth)
-            for node in reversed(tree.nodes[1:]):
+            parents = {tree[d].parent for d in dead} - {None, ROOT}
+            heap = [-n for n in self._failing | parents if n is not None]
+            heapq.heapify(heap)
+            queued = {-h for h in heap}
+            while heap:
+                node = tree[-heapq.heappop(heap)]
                 if node.id in dead or not node.success or node.depth == 0:
                     continue
                 first = self.queries.first(node)
@@ -141,24 +209,31 @@ class Evidence:
                 for c in node.children:
                     if c in dead:
                         reason |= dead[c] - set(tree[c].outputs)
-                _mark(tree, dead, origin, node, reason, depth)
+                for marked in _mark(tree, dead, origin, node, reason, depth):
+                    parent = tree[marked].parent
+                    if parent is not None and parent not in queued:
+                        queued.add(parent)
+                        heapq.heappush(heap, -parent)
             if (len(dead), sum(len(r) for r in dead.values())) == before:
                 break
         return set(dead)
 
     def _pooled_failures(
-        self,
-        tree: Tree,
-        dead: Mapping[int, set[str]],
-        origin: Mapping[int, int],
-        deepest: Mapping[int, int],
+        self, tree: Tree, dead: Mapping[int, set[str]], origin: Mapping[int, int]
     ) -> dict[str, int]:
         """Per query identity: how often it has failed, or led only to a dead end, over every
         node that made it; left out while an attempt that is not a dead end got past the
-        depth where those failures happened."""
+        depth where those failures happened. Only queries with a failed attempt or a dead end
+        among their attempts can have any."""
+        keys = set(self._failed_keys)
+        for d in dead:
+            key = self._maker_key(tree, tree[d].parent or ROOT)
+            if key is not None:
+                keys.add(key)
         out: dict[str, int] = {}
-        for key, makers in self.groups.items():
-            children = [c for n in makers for c in tree[n].children]
+        deepest = self._deepest
+        for key in keys:
+            children = [c for n in self.groups.get(key, ()) for c in tree[n].children]
             bad = [c for c in children if not tree[c].success or c in dead]
             if not bad:
                 continue
@@ -196,45 +271,44 @@ class Evidence:
         values bound last until the nodes whose query agrees on the rest have failed at least
         :data:`SHARED_MIN` times (and as often as ``dead_after`` asks) with no success among
         them, and differ in what was dropped. Those nodes are dead ends because of the values
-        kept, and the search backs up to the last of them."""
-        groups: dict[tuple[int, int], list[Node]] = {}
-        for node in tree.nodes[1:]:
-            if (
-                node.success
-                and node.depth > 0
-                and node.children
-                and self.queries.first(node) is not None
-            ):
-                groups.setdefault((node.plan_index, node.depth), []).append(node)
+        kept, and the search backs up to the last of them. A group of nodes (one stream of one
+        plan) is looked at again only when one of them has new children."""
+        for group in self._stale_groups:
+            self._culprits[group] = self._group_culprits(tree, self._members[group])
+        self._stale_groups.clear()
         out: list[tuple[Node, set[str]]] = []
+        for group in sorted(self._members, key=lambda g: self._members[g][0]):
+            out += self._culprits.get(group, [])
+        return out
+
+    def _group_culprits(self, tree: Tree, member_ids: list[int]) -> list[tuple[Node, set[str]]]:
+        makers = [tree[m] for m in member_ids]
 
         def failed(n: Node) -> bool:  # the query itself failed, every time it was made here
             return not any(tree[c].success for c in n.children)
 
-        for makers in groups.values():
-            failing = [n for n in makers if failed(n)]
-            if len(failing) < SHARED_MIN:
+        failing = [n for n in makers if failed(n)]
+        if len(failing) < SHARED_MIN:
+            return []
+        latest = failing[-1]
+        sig, bound_at = self._signature(tree, latest)
+        first = self.queries.first(latest)
+        assert first is not None
+        need = max(SHARED_MIN, self._dead_after(first))
+        depths = sorted(set(bound_at.values()), reverse=True)
+        for cut in depths[1:]:  # the deepest cut is the query's identity: pooled already
+            kept = {n: v for n, v in sig.items() if bound_at[n] <= cut}
+            agree = [m for m in makers if self._agrees(tree, m, kept)]
+            if not all(failed(m) for m in agree):
+                break  # a success shares these values: so would every shallower cut's
+            failures = sum(len(m.children) for m in agree)
+            if failures < need:
                 continue
-            latest = failing[-1]
-            sig, bound_at = self._signature(tree, latest)
-            first = self.queries.first(latest)
-            assert first is not None
-            need = max(SHARED_MIN, self._dead_after(first))
-            depths = sorted(set(bound_at.values()), reverse=True)
-            for cut in depths[1:]:  # the deepest cut is the query's identity: pooled already
-                kept = {n: v for n, v in sig.items() if bound_at[n] <= cut}
-                agree = [m for m in makers if self._agrees(tree, m, kept)]
-                if not all(failed(m) for m in agree):
-                    break  # a success shares these values: so would every shallower cut's
-                failures = sum(len(m.children) for m in agree)
-                if failures < need:
-                    continue
-                if len({tuple(self._signature(tree, m)[0].items()) for m in agree}) < 2:
-                    continue  # the same query each time: its identity pools it
-                reason = set(kept)
-                out += [(m, reason) for m in agree]
-                break
-        return out
+            if len({tuple(self._signature(tree, m)[0].items()) for m in agree}) < 2:
+                continue  # the same query each time: its identity pools it
+            reason = set(kept)
+            return [(m, reason) for m in agree]
+        return []
 
     def _agrees(self, tree: Tree, node: Node, kept: Mapping[str, str]) -> bool:
         sig = self._signature(tree, node)[0]
@@ -248,27 +322,20 @@ def _mark(
     node: Node,
     reason: set[str],
     depth: int,
-) -> None:
+) -> list[int]:
     """Take ``node`` for a dead end because of ``reason`` (the objects its failures, at
-    ``depth``, depend on), and its ancestors up to the one that bound one of them."""
+    ``depth``, depend on), and its ancestors up to the one that bound one of them; returns the
+    nodes marked."""
     current = node
     dead[current.id] = reason
     origin[current.id] = depth
+    marked = [current.id]
     while not (set(current.outputs) & reason) and current.parent is not None:
         parent = tree[current.parent]
         if parent.depth == 0 or parent.id == ROOT:
             break
         dead[parent.id] = reason
         origin[parent.id] = depth
+        marked.append(parent.id)
         current = parent
-
-
-def _deepest(tree: Tree) -> dict[int, int]:
-    """Per node, the depth of the deepest success in its subtree (itself included)."""
-    deepest: dict[int, int] = {}
-    for node in reversed(tree.nodes[1:]):
-        mine = node.depth if node.success else -1
-        deepest[node.id] = max(mine, deepest.get(node.id, -1))
-        if node.parent is not None:
-            deepest[node.parent] = max(deepest.get(node.parent, -1), deepest[node.id])
-    return deepest
+    return marked

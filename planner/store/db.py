@@ -709,6 +709,21 @@ class RunStore:
                 out.extend(QueryOutcome(*row) for row in conn.execute(query))
         return out
 
+    def event_times(self, run_ids: list[str], type_: str) -> dict[str, float]:
+        """Per run: the time ``t`` of its first event of type ``type_`` (runs without one are
+        left out)."""
+        out: dict[str, float] = {}
+        with self.engine.connect() as conn:
+            for i in range(0, len(run_ids), 500):  # SQLite caps a statement's parameters
+                chunk = run_ids[i : i + 500]
+                query = (
+                    select(EventRow.run_id, func.min(EventRow.t))
+                    .where(EventRow.run_id.in_(chunk), EventRow.type == type_)
+                    .group_by(EventRow.run_id)
+                )
+                out.update({run_id: float(t) for run_id, t in conn.execute(query)})
+        return out
+
     # benchmarks
 
     def create_bench(self, config: dict[str, Any]) -> str:
