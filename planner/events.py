@@ -147,7 +147,9 @@ class NodeAdded(_EventBase):
                 "outputs", f"{len(self.outputs)} values for {len(self.output_names)} output names"
             )
         if self.output_labels and len(self.output_labels) != len(self.outputs):
-            self._fail("output_labels", f"{len(self.output_labels)} labels, {len(self.outputs)} values")
+            self._fail(
+                "output_labels", f"{len(self.output_labels)} labels, {len(self.outputs)} values"
+            )
 
 
 @dataclass(frozen=True)
