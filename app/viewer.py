@@ -501,7 +501,8 @@ class RunViewer:
             )
             _set_slider(self._time, 0.0)
             return
-        self._time.max = max(math.ceil(anim.duration / SLIDER_STEP) * SLIDER_STEP, SLIDER_STEP)
+        steps = max(math.ceil(anim.duration / SLIDER_STEP), 1)
+        self._time.max = round(steps * SLIDER_STEP, 6)  # 28.4, not 28.400000000000002
         _set_slider(self._time, min(self._t, anim.duration))
         _set_markdown(
             self._plan_note, f"Plan: {anim.duration:.1f} s of motion, played in real time."
