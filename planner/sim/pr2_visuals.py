@@ -145,58 +145,53 @@ def _shoulder_pan() -> Parts:
     return {"white": [m.capsule(0.09, 0.3, at=(0.0, 0.0, -0.08), sections=ARM_SECTIONS)]}
 
 
-def _shoulder_lift() -> Parts:
+def _flex_joint(
+    radius: float, length: float, bevel: float, cap: tuple[float, float], colours: tuple[str, str]
+) -> Parts:
+    """A joint turning about the link's y axis: a drum with bevelled rims and a cap of (radius,
+    thickness) on each end, in (drum, caps) colours."""
+    drum, caps = colours
+    y = length / 2 + cap[1] / 2
     return {
-        "grey": [m.cylinder(0.085, 0.15, axis="y", bevel=0.025, sections=ARM_SECTIONS)],
-        "dark_grey": [
-            m.cylinder(0.05, 0.01, at=(0.0, y, 0.0), axis="y", sections=DETAIL_SECTIONS)
-            for y in (0.08, -0.08)
+        drum: [m.cylinder(radius, length, axis="y", bevel=bevel, sections=ARM_SECTIONS)],
+        caps: [
+            m.cylinder(cap[0], cap[1], at=(0.0, side * y, 0.0), axis="y", sections=DETAIL_SECTIONS)
+            for side in (1, -1)
         ],
     }
 
 
-def _shell(profile: list[tuple[float, float]]) -> trimesh.Trimesh:
-    """A white arm shell along the link's x axis: (radius, x) from one end to the other."""
-    ends = [(0.0, profile[0][1]), *profile, (0.0, profile[-1][1])]
-    return m.lathe(ends, axis="x", sections=ARM_SECTIONS)
+def _roll_link(collar: tuple[float, float, float], shell: list[tuple[float, float]]) -> Parts:
+    """A link turning about its x axis: a grey collar of (radius, length, x) at the joint and a
+    white shell of (radius, x) points along the rest."""
+    radius, length, x = collar
+    ends = [(0.0, shell[0][1]), *shell, (0.0, shell[-1][1])]
+    return {
+        "grey": [m.cylinder(radius, length, at=(x, 0.0, 0.0), axis="x", bevel=radius * 0.15)],
+        "white": [m.lathe(ends, axis="x", sections=ARM_SECTIONS)],
+    }
+
+
+def _shoulder_lift() -> Parts:
+    return _flex_joint(0.085, 0.15, 0.025, (0.05, 0.01), ("grey", "dark_grey"))
 
 
 def _upper_arm() -> Parts:
-    return {
-        "grey": [m.cylinder(0.075, 0.06, at=(0.06, 0.0, 0.0), axis="x", bevel=0.01)],
-        "white": [
-            _shell([(0.064, 0.09), (0.065, 0.14), (0.062, 0.26), (0.055, 0.31), (0.035, 0.337)])
-        ],
-    }
+    shell = [(0.064, 0.09), (0.065, 0.14), (0.062, 0.26), (0.055, 0.31), (0.035, 0.337)]
+    return _roll_link((0.075, 0.06, 0.06), shell)
 
 
 def _elbow() -> Parts:
-    return {
-        "dark_grey": [m.cylinder(0.055, 0.1, axis="y", bevel=0.01, sections=ARM_SECTIONS)],
-        "grey": [
-            m.cylinder(0.035, 0.01, at=(0.0, y, 0.0), axis="y", sections=DETAIL_SECTIONS)
-            for y in (0.055, -0.055)
-        ],
-    }
+    return _flex_joint(0.055, 0.1, 0.01, (0.035, 0.01), ("dark_grey", "grey"))
 
 
 def _forearm() -> Parts:
-    return {
-        "grey": [m.cylinder(0.055, 0.05, at=(0.05, 0.0, 0.0), axis="x", bevel=0.008)],
-        "white": [
-            _shell([(0.049, 0.075), (0.05, 0.11), (0.046, 0.22), (0.04, 0.255), (0.03, 0.268)])
-        ],
-    }
+    shell = [(0.049, 0.075), (0.05, 0.11), (0.046, 0.22), (0.04, 0.255), (0.03, 0.268)]
+    return _roll_link((0.055, 0.05, 0.05), shell)
 
 
 def _wrist_flex() -> Parts:
-    return {
-        "dark_grey": [m.cylinder(0.04, 0.07, axis="y", bevel=0.008, sections=ARM_SECTIONS)],
-        "grey": [
-            m.cylinder(0.025, 0.006, at=(0.0, y, 0.0), axis="y", sections=DETAIL_SECTIONS)
-            for y in (0.037, -0.037)
-        ],
-    }
+    return _flex_joint(0.04, 0.07, 0.008, (0.025, 0.006), ("dark_grey", "grey"))
 
 
 def _wrist_roll() -> Parts:
