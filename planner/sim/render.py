@@ -17,7 +17,6 @@ import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -159,13 +158,16 @@ def _add_mesh(client: int, body: Body, mesh: Mesh) -> int:
     )
 
 
-def _mesh_corners(mesh: Mesh, pose: tuple[Vec3, tuple[float, float, float, float]]) -> Any:
+def _mesh_corners(
+    mesh: Mesh, pose: tuple[Vec3, tuple[float, float, float, float]]
+) -> npt.NDArray[np.float64]:
     """The corners of a mesh file's bounding box, placed at ``pose`` (pybullet knows no bounds
     of a body that only draws)."""
     bounds = np.asarray(trimesh.load(str(mesh.path), force="mesh").bounds) * mesh.scale
     local = np.array([(x, y, z) for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]])
     rotation = np.array(p.getMatrixFromQuaternion(pose[1])).reshape(3, 3)
-    return local @ rotation.T + np.array(pose[0])
+    placed: npt.NDArray[np.float64] = local @ rotation.T + np.array(pose[0])
+    return placed
 
 
 # --- camera ----------------------------------------------------------------------------------
