@@ -8,8 +8,8 @@ bad data is logged and skipped. What is drawn (docs/viewer.md) comes from the do
 (``DomainSpec.view``, :mod:`planner.view`); a domain without one gets the note "There is no 3D
 view for this domain":
 
-- the scene's bodies (boxes, meshes, URDFs through :class:`viser.extras.ViserUrdf`) at their start
-  poses, with their labels;
+- the scene's bodies (boxes, mesh files through trimesh, URDFs' visual meshes posed by yourdfpy)
+  at their start poses, with their labels, on the scene's floor (or a grid);
 - every successful sample as the hook's markers (ghosts), in its layers, coloured by the node's
   predicted cost ``Q`` (green low, red high, grey without a prediction); failed queries as red
   diamonds where they were about;
@@ -28,12 +28,13 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+import trimesh
 import viser
-from viser.extras import ViserUrdf
 
 from app.viewer_search import Ghost, SearchFold, tree_layout
 from planner.domains import LoadedDomain, problem_for_scene
@@ -41,7 +42,19 @@ from planner.pddl.structs import Problem
 from planner.plans import PlanFileError, parse_plan
 from planner.scene import SceneError
 from planner.sim.transforms import Pose, multiply, to_wxyz
-from planner.view import Body, BodyState, Box, SceneView, Timeline, Urdf, Vec3
+from planner.view import (
+    IDENTITY,
+    Body,
+    BodyState,
+    Box,
+    Mesh,
+    Meshes,
+    Rgb,
+    SceneView,
+    Timeline,
+    Urdf,
+    Vec3,
+)
 
 log = logging.getLogger(__name__)
 
@@ -79,12 +92,12 @@ class _BodyView:
 
     def __init__(self, server: viser.ViserServer, body: Body) -> None:
         self.body = body
-        self.urdf: Any = None
-        self.view: ViserUrdf | None = None
+        self.urdf: _UrdfView | None = None
         name = f"/scene/bodies/{body.name}"
         scene = server.scene
         shape = body.shape
         self.frame = scene.add_frame(name, show_axes=False)
+        bounds: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None = None
         if isinstance(shape, Box):
             scene.add_box(
                 f"{name}/shape",
@@ -92,21 +105,21 @@ class _BodyView:
                 dimensions=shape.size,
                 opacity=body.opacity,
             )
+            half = np.array(shape.size, dtype=np.float64) / 2
+            bounds = (-half, half)
         elif isinstance(shape, Urdf):
-            import yourdfpy  # type: ignore[import-untyped]  # ViserUrdf's URDF loader (viser[urdf])
-
-            self.urdf = yourdfpy.URDF.load(str(shape.path))
-            self.view = ViserUrdf(server, self.urdf, root_node_name=name)
-            self.joints: tuple[str, ...] = tuple(self.urdf.actuated_joint_names)
+            self.urdf = _UrdfView(server, shape.path, name)
         else:
-            import trimesh
-
-            mesh = trimesh.load(str(shape.path), force="mesh")
-            if not isinstance(mesh, trimesh.Trimesh):
-                raise ValueError(f"{shape.path} is not a single mesh")
-            scene.add_mesh_trimesh(f"{name}/shape", mesh, scale=shape.scale)
+            parts = shape.parts if isinstance(shape, Meshes) else (shape,)
+            for i, part in enumerate(parts):
+                mesh = _load_mesh(part, body.color)
+                scene.add_mesh_trimesh(f"{name}/shape{i}", mesh, scale=part.scale)
+                lo, hi = (np.asarray(b, dtype=np.float64) * part.scale for b in mesh.bounds)
+                if bounds is not None:
+                    lo, hi = np.minimum(bounds[0], lo), np.maximum(bounds[1], hi)
+                bounds = (lo, hi)
         if body.label:
-            top = shape.size[2] / 2 + 0.05 if isinstance(shape, Box) else 0.3
+            top = float(bounds[1][2]) + 0.05 if bounds is not None else 0.3
             scene.add_label(
                 f"{name}/label",
                 body.label,
@@ -114,6 +127,7 @@ class _BodyView:
                 font_screen_scale=0.7,
                 anchor="bottom-center",
             )
+        self.corners = _corners((body.position, body.quat), bounds)
         self.pose: Pose = (body.position, body.quat)
         self.set(BodyState(body.position, body.quat, _urdf_joints(body)))
 
@@ -122,15 +136,72 @@ class _BodyView:
         self.frame.position = state.position
         self.frame.wxyz = to_wxyz(state.quat)
         self.frame.visible = state.visible
-        if self.view is not None and state.joints is not None:
-            self.view.update_cfg(np.array([state.joints.get(j, 0.0) for j in self.joints]))
+        if self.urdf is not None and state.joints is not None:
+            self.urdf.update(state.joints)
 
     def link_pose(self, link: str) -> Pose:
         """A link's pose in the world (a URDF body's link; the body's own pose otherwise)."""
         if self.urdf is None:
             return self.pose
+        return multiply(self.pose, self.urdf.link_pose(link))
+
+
+class _UrdfView:
+    """A URDF's visual meshes in viser: a frame per link that has any, below the body's frame,
+    placed by yourdfpy's forward kinematics. (``viser.extras.ViserUrdf`` does the same but
+    drops the meshes' normals, so every mesh would be drawn faceted.)"""
+
+    def __init__(self, server: viser.ViserServer, path: Path, root: str) -> None:
+        import yourdfpy  # type: ignore[import-untyped]  # viser's URDF loader (viser[urdf])
+
+        self.urdf = yourdfpy.URDF.load(str(path))
+        self.joints: tuple[str, ...] = tuple(self.urdf.actuated_joint_names)
+        self.frames: dict[str, viser.FrameHandle] = {}
+        graph = self.urdf.scene.graph
+        for geometry, mesh in self.urdf.scene.geometry.items():
+            link = graph.transforms.parents[geometry]
+            if link not in self.frames:
+                self.frames[link] = server.scene.add_frame(f"{root}/{link}", show_axes=False)
+            placed = mesh.copy()
+            placed.apply_transform(self.urdf.get_transform(geometry, link))
+            _ = placed.vertex_normals  # computed now, so the GLB carries them
+            server.scene.add_mesh_trimesh(f"{root}/{link}/{geometry}", placed)
+
+    def update(self, joints: Mapping[str, float]) -> None:
+        self.urdf.update_cfg(np.array([joints.get(j, 0.0) for j in self.joints]))
+        for link, frame in self.frames.items():
+            position, quat = self.link_pose(link)
+            frame.position = position
+            frame.wxyz = to_wxyz(quat)
+
+    def link_pose(self, link: str) -> Pose:
+        """A link's pose relative to the URDF's root."""
         m = np.asarray(self.urdf.get_transform(link, self.urdf.base_link), dtype=np.float64)
-        return multiply(self.pose, _pose_from_matrix(m))
+        return _pose_from_matrix(m)
+
+
+def _load_mesh(part: Mesh, color: Rgb) -> trimesh.Trimesh:
+    """A mesh file, in the part's colour (else the body's) unless it has colours of its own."""
+    mesh = trimesh.load(str(part.path), force="mesh")
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise ValueError(f"{part.path} is not a single mesh")
+    if mesh.visual is None or not mesh.visual.defined:
+        rgb = part.color or color
+        mesh.visual = trimesh.visual.ColorVisuals(mesh, face_colors=(*rgb, 255))
+    _ = mesh.vertex_normals  # computed now, so the GLB carries them (else it is drawn faceted)
+    return mesh
+
+
+def _corners(
+    pose: Pose, bounds: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None
+) -> list[Vec3]:
+    """The corners of a body's box of ``bounds`` (in its frame) in the world; its position
+    alone without bounds."""
+    if bounds is None:
+        return [pose[0]]
+    lo, hi = bounds
+    local = [(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    return [multiply(pose, ((float(x), float(y), float(z)), IDENTITY))[0] for x, y, z in local]
 
 
 def _urdf_joints(body: Body) -> Mapping[str, float] | None:
@@ -341,24 +412,30 @@ class RunViewer:
         scene = self._server.scene
         for name in ("scene", "search", "tree"):
             self._groups[name] = scene.add_frame(f"/{name}", show_axes=False)
-        lo, hi = _bounds(view.bodies)
-        cx, cy = (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2
-        span = max(hi[0] - lo[0], hi[1] - lo[1]) + 3.0
-        scene.add_grid(
-            "/scene/floor",
-            width=span + PANEL_GAP * 2,
-            height=span,
-            position=(cx + PANEL_GAP, cy, view.floor_z),
-            cell_size=0.25,
-            section_size=1.0,
-            plane_color=(236, 236, 232),
-            plane_opacity=0.0,
-        )
         for body in view.bodies:
             try:
                 self._bodies[body.name] = _BodyView(self._server, body)
             except (ImportError, OSError, ValueError) as exc:
                 log.warning("viewer: cannot show body %s (%s); showing the rest", body.name, exc)
+        lo, hi = _bounds(view.bodies, self._bodies)
+        cx, cy = (lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2
+        if view.floor is not None:
+            try:
+                _BodyView(self._server, view.floor)
+            except (OSError, ValueError) as exc:
+                log.warning("viewer: cannot show the floor (%s)", exc)
+        else:
+            span = max(hi[0] - lo[0], hi[1] - lo[1]) + 3.0
+            scene.add_grid(
+                "/scene/floor",
+                width=span + PANEL_GAP * 2,
+                height=span,
+                position=(cx + PANEL_GAP, cy, view.floor_z),
+                cell_size=0.25,
+                section_size=1.0,
+                plane_color=(236, 236, 232),
+                plane_opacity=0.0,
+            )
         width = max(PANEL_MIN_WIDTH, hi[1] - lo[1])
         self._panel = _Panel(hi[0] + PANEL_GAP, cy + width / 2, width, PANEL_TOP, PANEL_HEIGHT)
         camera = self._server.initial_camera
@@ -424,7 +501,8 @@ class RunViewer:
             )
             _set_slider(self._time, 0.0)
             return
-        self._time.max = max(math.ceil(anim.duration / SLIDER_STEP) * SLIDER_STEP, SLIDER_STEP)
+        steps = max(math.ceil(anim.duration / SLIDER_STEP), 1)
+        self._time.max = round(steps * SLIDER_STEP, 6)  # 28.4, not 28.400000000000002
         _set_slider(self._time, min(self._t, anim.duration))
         _set_markdown(
             self._plan_note, f"Plan: {anim.duration:.1f} s of motion, played in real time."
@@ -706,16 +784,13 @@ class RunViewer:
         _set_markdown(self._status, text)
 
 
-def _bounds(bodies: Sequence[Body]) -> tuple[Vec3, Vec3]:
-    """The scene's extent: boxes by their corners, other bodies by their position."""
+def _bounds(bodies: Sequence[Body], built: Mapping[str, _BodyView]) -> tuple[Vec3, Vec3]:
+    """The scene's extent: the corners of what each body draws (a URDF by its position; a body
+    that could not be built by its position)."""
     points: list[Vec3] = []
     for b in bodies:
-        x, y, z = b.position
-        if isinstance(b.shape, Box):
-            sx, sy, sz = (v / 2 for v in b.shape.size)
-            points += [(x - sx, y - sy, z - sz), (x + sx, y + sy, z + sz)]
-        else:
-            points.append((x, y, z))
+        view = built.get(b.name)
+        points += view.corners if view is not None else [b.position]
     if not points:
         return (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)
     xs, ys, zs = zip(*points, strict=True)
@@ -728,7 +803,7 @@ def _nothing_shown() -> dict[str, int]:
 
 # --- meshes of the ghosts (vertices, faces), side "double" so winding does not matter ------------
 
-Mesh = tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]
+GhostMesh = tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]
 
 _BOX_FACES = np.array(
     [
@@ -739,7 +814,7 @@ _BOX_FACES = np.array(
 )  # fmt: skip
 
 
-def _boxes(*boxes: tuple[tuple[float, float, float], tuple[float, float, float]]) -> Mesh:
+def _boxes(*boxes: tuple[tuple[float, float, float], tuple[float, float, float]]) -> GhostMesh:
     """One mesh of axis-aligned boxes given as (centre, size)."""
     vertices: list[tuple[float, float, float]] = []
     faces: list[npt.NDArray[np.uint32]] = []
@@ -754,7 +829,7 @@ def _boxes(*boxes: tuple[tuple[float, float, float], tuple[float, float, float]]
     return np.array(vertices, dtype=np.float32), np.concatenate(faces).astype(np.uint32)
 
 
-def _arrow() -> Mesh:
+def _arrow() -> GhostMesh:
     """A flat arrow on the floor along +x from the base's centre: where the robot faces."""
     outline = [(-0.12, 0.05), (0.10, 0.05), (0.10, 0.10), (0.25, 0.0), (0.10, -0.10), (0.10, -0.05)]
     outline += [(-0.12, -0.05)]
@@ -764,7 +839,7 @@ def _arrow() -> Mesh:
     return vertices, faces
 
 
-_OCTAHEDRON: Mesh = (
+_OCTAHEDRON: GhostMesh = (
     np.array(
         [(0.04, 0, 0), (-0.04, 0, 0), (0, 0.04, 0), (0, -0.04, 0), (0, 0, 0.05), (0, 0, -0.05)],
         dtype=np.float32,

@@ -3,8 +3,8 @@ bound plan moves the bodies. Plain data, no viser (only ``app/`` touches viser).
 
 A domain's :class:`DomainView` (its ``view`` hook) gives:
 
-- :meth:`DomainView.scene`: the scene's bodies (:class:`Body`: a box, a mesh file or a URDF, with
-  a pose, a colour and an optional label) and optionally where the camera starts;
+- :meth:`DomainView.scene`: the scene's bodies (:class:`Body`: a box, mesh files or a URDF, with
+  a pose, a colour and an optional label), optionally where the camera starts and the floor;
 - :meth:`DomainView.markers`: how a sampled value is drawn as a ghost where it lies
   (:class:`Marker`: boxes, a compound of boxes, an arrow on the floor, a path), in named layers
   the view counts and batches ("placements", "grasps", ...);
@@ -57,10 +57,29 @@ class Box:
 
 @dataclass(frozen=True)
 class Mesh:
-    """A mesh file (anything trimesh reads: .obj, .stl, .glb, ...), scaled."""
+    """A mesh file in its body's frame, scaled: anything trimesh reads (.obj, .stl, .glb, ...)
+    for the 3D view, .obj or .stl for ``tamp render``. It is drawn in ``color`` (the body's
+    colour when None); the 3D view keeps the colours of a file that has its own."""
 
     path: Path
     scale: float = 1.0
+    color: Rgb | None = None
+
+    def __post_init__(self) -> None:
+        _finite((self.scale,), "mesh scale")
+        if self.scale <= 0:
+            raise ValueError(f"a mesh's scale must be positive, got {self.scale}")
+
+
+@dataclass(frozen=True)
+class Meshes:
+    """Several mesh files that make one body, e.g. one per colour (a table's top and legs)."""
+
+    parts: tuple[Mesh, ...]
+
+    def __post_init__(self) -> None:
+        if not self.parts:
+            raise ValueError("a Meshes shape needs at least one part")
 
 
 @dataclass(frozen=True)
@@ -72,7 +91,7 @@ class Urdf:
     joints: Mapping[str, float] = field(default_factory=dict)
 
 
-Shape = Box | Mesh | Urdf
+Shape = Box | Mesh | Meshes | Urdf
 
 
 @dataclass(frozen=True)
@@ -83,7 +102,7 @@ class Body:
     shape: Shape
     position: Vec3 = (0.0, 0.0, 0.0)
     quat: Quat = IDENTITY
-    color: Rgb = GREY  # boxes; meshes and URDFs keep their own colours
+    color: Rgb = GREY  # boxes, and meshes without a colour of their own; URDFs keep theirs
     label: str | None = None  # drawn above the body
     opacity: float | None = None
 
@@ -101,9 +120,13 @@ class SceneView:
     bodies: tuple[Body, ...]
     camera: tuple[Vec3, Vec3] | None = None  # (position, look at); None: fitted to the bodies
     floor_z: float = 0.0  # height of the ground plane
+    # The ground drawn under the scene (a tiled floor), in place of the view's own (the 3D
+    # view's grid, the renderer's grey plane); not a body of the scene: the camera and the
+    # tree drawing are placed by the bodies alone. None: the view's own ground at floor_z.
+    floor: Body | None = None
 
     def __post_init__(self) -> None:
-        names = [b.name for b in self.bodies]
+        names = [b.name for b in self.bodies] + ([self.floor.name] if self.floor else [])
         if len(set(names)) != len(names):
             raise ValueError(f"two bodies share a name: {sorted(names)}")
 

@@ -1,17 +1,19 @@
 """A generated PR2 model whose arm kinematics match the ``pr2-ikfast`` solver.
 
 No PR2 URDF with meshes can be installed here, so the project builds its own from the robot's
-published dimensions (the public ``pr2_description`` kinematics) and joint limits, with boxes,
-cylinders and spheres that look like a PR2 and double as collision geometry. The kinematic chain
-(``base_footprint`` -> ``base_link`` -> torso -> shoulder -> ... -> ``{l,r}_gripper_tool_frame``)
-uses the same joint origins as the IKFast solver, so forward kinematics in pybullet and
-``pr2_ikfast`` agree (checked by ``tests/sim/test_pr2_model.py``).
+published dimensions (the public ``pr2_description`` kinematics) and joint limits. Each link's
+collision geometry is a few boxes, cylinders and spheres (what the planner checks); what is drawn
+is a set of meshes shaped and coloured like the PR2 (:mod:`planner.sim.pr2_visuals`,
+``scenes/pr2_meshes/``). The kinematic chain (``base_footprint`` -> ``base_link`` -> torso ->
+shoulder -> ... -> ``{l,r}_gripper_tool_frame``) uses the same joint origins as the IKFast solver,
+so forward kinematics in pybullet and ``pr2_ikfast`` agree (checked by
+``tests/sim/test_pr2_model.py``).
 
 The base moves in the plane by setting the pose of ``base_footprint`` in the simulator; the URDF
 has no planar joints.
 
-``python -m planner.sim.pr2_model --write`` writes ``scenes/pr2.urdf``; ``--check`` exits 1 when
-the committed file differs from :func:`generate_pr2_urdf`.
+``python -m planner.sim.pr2_model --write`` writes ``scenes/pr2.urdf`` and its meshes; ``--check``
+exits 1 when a committed file differs from what the generator makes (or a mesh file is left over).
 """
 
 from __future__ import annotations
@@ -193,21 +195,18 @@ MATERIALS: dict[str, tuple[float, float, float, float]] = {
 
 @dataclass(frozen=True)
 class Shape:
-    """One primitive of a link, in the link frame; cylinders run along their local z axis."""
+    """One collision primitive of a link, in the link frame; cylinders run along their local z
+    axis. (What is drawn is the link's meshes, :mod:`planner.sim.pr2_visuals`.)"""
 
     kind: ShapeKind
     size: tuple[float, ...]  # box: (x, y, z); cylinder: (radius, length); sphere: (radius,)
     xyz: Vec3 = (0.0, 0.0, 0.0)
     rpy: Vec3 = (0.0, 0.0, 0.0)
-    material: str = "grey"
-    collision: bool = True  # False: drawn only (small details)
 
     def __post_init__(self) -> None:
         expected = {"box": 3, "cylinder": 2, "sphere": 1}[self.kind]
         if len(self.size) != expected or any(s <= 0 for s in self.size):
             raise ValueError(f"{self.kind} needs {expected} positive sizes, got {self.size}")
-        if self.material not in MATERIALS:
-            raise ValueError(f"unknown material {self.material!r}; known: {sorted(MATERIALS)}")
 
 
 @dataclass(frozen=True)
@@ -259,21 +258,21 @@ class RobotModel:
                 raise ValueError(f"joint {joint.name}: unknown parent {joint.parent}")
 
 
-def _cyl_x(radius: float, length: float, x: float, material: str) -> Shape:
+def _cyl_x(radius: float, length: float, x: float) -> Shape:
     """A cylinder along the link's x axis, centred at ``x``."""
-    return Shape("cylinder", (radius, length), (x, 0.0, 0.0), (0.0, _HALF_PI, 0.0), material)
+    return Shape("cylinder", (radius, length), (x, 0.0, 0.0), (0.0, _HALF_PI, 0.0))
 
 
-def _cyl_y(radius: float, length: float, material: str) -> Shape:
+def _cyl_y(radius: float, length: float) -> Shape:
     """A cylinder along the link's y axis, centred at the origin."""
-    return Shape("cylinder", (radius, length), rpy=(_HALF_PI, 0.0, 0.0), material=material)
+    return Shape("cylinder", (radius, length), rpy=(_HALF_PI, 0.0, 0.0))
 
 
 def _base_parts() -> tuple[list[Link], list[Joint]]:
     bx, by, bz = BASE_SIZE
     wheel_z = 0.04 - BASE_LINK_HEIGHT  # wheels of radius 0.04 touch the floor
     casters = tuple(
-        Shape("cylinder", (0.04, 0.03), (sx * 0.24, sy * 0.24, wheel_z), (_HALF_PI, 0, 0), "black")
+        Shape("cylinder", (0.04, 0.03), (sx * 0.24, sy * 0.24, wheel_z), (_HALF_PI, 0, 0))
         for sx in (1, -1)
         for sy in (1, -1)
     )
@@ -281,9 +280,9 @@ def _base_parts() -> tuple[list[Link], list[Joint]]:
         BASE_LINK,
         116.0,
         (
-            Shape("box", (bx, by, bz), (0.0, 0.0, 0.12), material="light_grey"),
-            Shape("box", (bx + 0.01, by + 0.01, 0.04), (0.0, 0.0, 0.0), material="dark_grey"),
-            Shape("box", (0.06, 0.1, 0.04), (bx / 2 - 0.02, 0.0, 0.29), material="black"),
+            Shape("box", (bx, by, bz), (0.0, 0.0, 0.12)),
+            Shape("box", (bx + 0.01, by + 0.01, 0.04), (0.0, 0.0, 0.0)),  # bumper
+            Shape("box", (0.06, 0.1, 0.04), (bx / 2 - 0.02, 0.0, 0.29)),  # base laser
             *casters,
         ),
     )
@@ -291,8 +290,8 @@ def _base_parts() -> tuple[list[Link], list[Joint]]:
         TORSO_LINK,
         36.0,
         (
-            Shape("box", (0.22, 0.3, 0.9), (-0.15, 0.0, -0.28), material="white"),  # spine
-            Shape("box", (0.3, 0.56, 0.06), (-0.08, 0.0, 0.2), material="light_grey"),  # top
+            Shape("box", (0.22, 0.3, 0.9), (-0.15, 0.0, -0.28)),  # spine
+            Shape("box", (0.3, 0.56, 0.06), (-0.08, 0.0, 0.2)),  # top
         ),
     )
     links = [Link(ROOT_LINK, 0.01), base, torso]
@@ -307,18 +306,14 @@ def _head_parts() -> tuple[list[Link], list[Joint]]:
     pan = Link(
         "head_pan_link",
         6.3,
-        (Shape("cylinder", (0.05, 0.15), (0.0, 0.0, -0.075), material="dark_grey"),),
+        (Shape("cylinder", (0.05, 0.15), (0.0, 0.0, -0.075)),),
     )
     tilt = Link(
         "head_tilt_link",
         4.5,
         (
-            Shape("box", (0.14, 0.32, 0.1), (0.0, 0.0, 0.03), material="grey"),
-            Shape("box", (0.07, 0.28, 0.045), (0.01, 0.0, 0.105), material="black"),  # depth cam
-            *(
-                Shape("cylinder", (0.022, 0.02), (0.075, y, 0.03), (0, _HALF_PI, 0), "black", False)
-                for y in (0.09, -0.09)  # stereo lenses
-            ),
+            Shape("box", (0.14, 0.32, 0.1), (0.0, 0.0, 0.03)),
+            Shape("box", (0.07, 0.28, 0.045), (0.01, 0.0, 0.105)),  # depth camera
         ),
     )
     joints = [
@@ -345,39 +340,39 @@ def _arm_parts(arm: str) -> tuple[list[Link], list[Joint]]:
         Link(
             f"{p}_shoulder_pan_link",
             25.8,
-            (Shape("cylinder", (0.09, 0.3), (0.0, 0.0, -0.08), material="white"),),
+            (Shape("cylinder", (0.09, 0.3), (0.0, 0.0, -0.08)),),
         ),
-        Link(f"{p}_shoulder_lift_link", 2.3, (Shape("sphere", (0.085,), material="grey"),)),
+        Link(f"{p}_shoulder_lift_link", 2.3, (Shape("sphere", (0.085,)),)),
         Link(
             f"{p}_upper_arm_roll_link",
             6.1,
             (
-                _cyl_x(0.065, 0.28, 0.2, "white"),
-                _cyl_x(0.075, 0.06, 0.06, "grey"),
+                _cyl_x(0.065, 0.28, 0.2),
+                _cyl_x(0.075, 0.06, 0.06),
             ),
         ),
-        Link(f"{p}_elbow_flex_link", 1.9, (_cyl_y(0.055, 0.12, "dark_grey"),)),
+        Link(f"{p}_elbow_flex_link", 1.9, (_cyl_y(0.055, 0.12),)),
         Link(
             f"{p}_forearm_roll_link",
             2.7,
-            (_cyl_x(0.05, 0.22, 0.16, "white"), _cyl_x(0.055, 0.05, 0.05, "grey")),
+            (_cyl_x(0.05, 0.22, 0.16), _cyl_x(0.055, 0.05, 0.05)),
         ),
-        Link(f"{p}_wrist_flex_link", 0.6, (_cyl_y(0.04, 0.08, "dark_grey"),)),
-        Link(f"{p}_wrist_roll_link", 0.1, (_cyl_x(0.035, 0.03, 0.015, "dark_grey"),)),
+        Link(f"{p}_wrist_flex_link", 0.6, (_cyl_y(0.04, 0.08),)),
+        Link(f"{p}_wrist_roll_link", 0.1, (_cyl_x(0.035, 0.03, 0.015),)),
         Link(
             f"{p}_gripper_palm_link",
             0.58,
-            (Shape("box", (0.1, 0.1, 0.05), (0.08, 0.0, 0.0), material="black"),),
+            (Shape("box", (0.1, 0.1, 0.05), (0.08, 0.0, 0.0)),),
         ),
         Link(
             f"{p}_gripper_l_finger_link",
             0.17,
-            (Shape("box", (fy, 0.012, 0.025), (fy / 2, 0.006, 0.0), material="dark_grey"),),
+            (Shape("box", (fy, 0.012, 0.025), (fy / 2, 0.006, 0.0)),),
         ),
         Link(
             f"{p}_gripper_r_finger_link",
             0.17,
-            (Shape("box", (fy, 0.012, 0.025), (fy / 2, -0.006, 0.0), material="dark_grey"),),
+            (Shape("box", (fy, 0.012, 0.025), (fy / 2, -0.006, 0.0)),),
         ),
         Link(f"{p}_gripper_tool_frame", 0.001),
     ]
@@ -459,7 +454,9 @@ def _geometry(shape: Shape) -> str:
     return f'<sphere radius="{_num(shape.size[0])}"/>'
 
 
-def _link_xml(link: Link) -> list[str]:
+def _link_xml(link: Link, visuals: Sequence[tuple[str, str]]) -> list[str]:
+    """A link's element: its inertia, its ``visuals`` (mesh file, material) and its collision
+    shapes."""
     inertia = _num(0.01 * link.mass)
     lines = [
         f"  <link name={quoteattr(link.name)}>",
@@ -468,23 +465,21 @@ def _link_xml(link: Link) -> list[str]:
         f'      <inertia ixx="{inertia}" ixy="0" ixz="0" iyy="{inertia}" iyz="0" izz="{inertia}"/>',
         "    </inertial>",
     ]
-    for shape in link.shapes:
-        origin = f'<origin xyz="{_nums(shape.xyz)}" rpy="{_nums(shape.rpy)}"/>'
-        geometry = _geometry(shape)
+    for mesh, material in visuals:
         lines += [
             "    <visual>",
-            f"      {origin}",
-            f"      <geometry>{geometry}</geometry>",
-            f'      <material name="{shape.material}"/>',
+            '      <origin xyz="0 0 0" rpy="0 0 0"/>',
+            f"      <geometry><mesh filename={quoteattr(mesh)}/></geometry>",
+            f"      <material name={quoteattr(material)}/>",
             "    </visual>",
         ]
-        if shape.collision:
-            lines += [
-                "    <collision>",
-                f"      {origin}",
-                f"      <geometry>{geometry}</geometry>",
-                "    </collision>",
-            ]
+    for shape in link.shapes:
+        lines += [
+            "    <collision>",
+            f'      <origin xyz="{_nums(shape.xyz)}" rpy="{_nums(shape.rpy)}"/>',
+            f"      <geometry>{_geometry(shape)}</geometry>",
+            "    </collision>",
+        ]
     lines.append("  </link>")
     return lines
 
@@ -512,7 +507,10 @@ def _joint_xml(joint: Joint) -> list[str]:
 
 
 def generate_pr2_urdf() -> str:
-    """The URDF text of :func:`pr2_model`; deterministic, so the committed file can be checked."""
+    """The URDF text of :func:`pr2_model`, drawn with the meshes of
+    :mod:`planner.sim.pr2_visuals`; deterministic, so the committed file can be checked."""
+    from planner.sim.pr2_visuals import link_visuals  # it reads this module's dimensions
+
     model = pr2_model()
     lines = [
         '<?xml version="1.0"?>',
@@ -523,35 +521,75 @@ def generate_pr2_urdf() -> str:
     for name, rgba in MATERIALS.items():
         lines.append(f'  <material name="{name}"><color rgba="{_nums(rgba)}"/></material>')
     for link in model.links:
-        lines += _link_xml(link)
+        lines += _link_xml(link, link_visuals(link.name))
     for joint in model.joints:
         lines += _joint_xml(joint)
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
 
 
+def generated_files() -> dict[Path, str]:
+    """Every file the generator writes (the URDF and its meshes) -> its text."""
+    from planner.sim.pr2_visuals import MESH_DIR, mesh_texts
+
+    files = {URDF_PATH: generate_pr2_urdf()}
+    files.update({MESH_DIR / name: text for name, text in mesh_texts().items()})
+    return files
+
+
+def stale_files() -> list[str]:
+    """What differs from the generator: files missing or out of date, and mesh files it no
+    longer makes; empty when everything is up to date."""
+    from planner.sim.pr2_visuals import MESH_DIR
+
+    files = generated_files()
+    out = [
+        f"{path.relative_to(REPO_ROOT)} is stale or missing"
+        for path, text in files.items()
+        if not path.is_file() or path.read_text(encoding="utf-8") != text
+    ]
+    if MESH_DIR.is_dir():
+        out += [
+            f"{path.relative_to(REPO_ROOT)} is no longer generated"
+            for path in sorted(MESH_DIR.iterdir())
+            if path not in files
+        ]
+    return out
+
+
+def write_files() -> list[Path]:
+    """Write the URDF and its meshes, remove mesh files no longer generated; the paths written."""
+    from planner.sim.pr2_visuals import MESH_DIR
+
+    files = generated_files()
+    MESH_DIR.mkdir(parents=True, exist_ok=True)
+    for path in sorted(MESH_DIR.iterdir()):
+        if path not in files:
+            path.unlink()
+    for path, text in files.items():
+        path.write_text(text, encoding="utf-8")
+    return list(files)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m planner.sim.pr2_model", description="Generate scenes/pr2.urdf."
+        prog="python -m planner.sim.pr2_model",
+        description="Generate scenes/pr2.urdf and its meshes (scenes/pr2_meshes/).",
     )
     mode = parser.add_mutually_exclusive_group(required=True)
-    mode.add_argument("--write", action="store_true", help=f"write {URDF_PATH}")
-    mode.add_argument("--check", action="store_true", help="exit 1 if the file is stale")
+    mode.add_argument("--write", action="store_true", help=f"write {URDF_PATH} and its meshes")
+    mode.add_argument("--check", action="store_true", help="exit 1 if a file is stale")
     args = parser.parse_args(argv)
-    text = generate_pr2_urdf()
     if args.write:
-        URDF_PATH.parent.mkdir(parents=True, exist_ok=True)
-        URDF_PATH.write_text(text, encoding="utf-8")
-        print(f"wrote {URDF_PATH}")
+        written = write_files()
+        print(f"wrote {URDF_PATH} and {len(written) - 1} meshes")
         return 0
-    current = URDF_PATH.read_text(encoding="utf-8") if URDF_PATH.exists() else None
-    if current != text:
-        print(
-            f"{URDF_PATH} is stale or missing; run: python -m planner.sim.pr2_model --write",
-            file=sys.stderr,
-        )
+    stale = stale_files()
+    for line in stale:
+        print(f"{line}; run: python -m planner.sim.pr2_model --write", file=sys.stderr)
+    if stale:
         return 1
-    print(f"{URDF_PATH} is up to date")
+    print(f"{URDF_PATH} and its meshes are up to date")
     return 0
 
 

@@ -1,7 +1,8 @@
 """Render a domain's scene to a PNG, headless, with pybullet's software renderer.
 
 The bodies of the scene description (:class:`planner.view.SceneView`, a domain's ``view`` hook)
-are built at their start poses; a grey floor is added and a camera is placed looking down at
+are built at their start poses (boxes, .obj and .stl meshes in their colours, URDFs with their
+visual meshes); the scene's floor, or a grey one, is added and a camera is placed looking down at
 about 45 degrees, far enough back that every body fits.
 The PNG is written with ``zlib`` and ``struct`` (no imaging library needed).
 """
@@ -13,17 +14,18 @@ import math
 import struct
 import time
 import zlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 import pybullet as p
+import trimesh
 
 from planner.sim import bodies
 from planner.sim.transforms import Vec3
-from planner.view import Body, Box, Mesh, SceneView
+from planner.view import Body, Box, Mesh, Meshes, SceneView
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +59,7 @@ class RenderInfo:
 
 def render_scene(view: SceneView, *, out: Path, width: int = 960, height: int = 720) -> RenderInfo:
     """Render a domain's scene description (its ``view`` hook's :class:`SceneView`: boxes,
-    meshes, URDFs at their start poses) and write a PNG to ``out``.
+    meshes, URDFs at their start poses, on its floor) and write a PNG to ``out``.
 
     Raises :class:`ValueError` when ``out``'s directory does not exist, the size is not
     positive or a body cannot be built (a mesh or URDF that does not load).
@@ -73,13 +75,17 @@ def render_scene(view: SceneView, *, out: Path, width: int = 960, height: int = 
     client = bodies.connect()
     try:
         named = {body.name: _build(client, body) for body in view.bodies}
-        rgb, seg = _render(client, list(named.values()), width, height, view.floor_z)
+        if view.floor is not None:
+            _build(client, view.floor)
+        corners = np.vstack([_corners(client, built) for built in named.values()])
+        floor = view.floor_z if view.floor is None else None
+        rgb, seg = _render(client, corners, width, height, floor)
     finally:
         bodies.disconnect(client)
     _write_png(out, rgb)
     ids, counts = np.unique(seg, return_counts=True)
     by_id = dict(zip(ids.tolist(), counts.tolist(), strict=True))
-    pixels = {name: int(by_id.get(body, 0)) for name, body in named.items()}
+    pixels = {name: sum(int(by_id.get(b, 0)) for b in built.ids) for name, built in named.items()}
     log.info("rendered to %s (%dx%d) in %.2f s", out, width, height, time.perf_counter() - start)
     info = RenderInfo(out, width, height, pixels)
     if info.hidden():
@@ -87,34 +93,26 @@ def render_scene(view: SceneView, *, out: Path, width: int = 960, height: int = 
     return info
 
 
-def _build(client: int, body: Body) -> int:
-    """One pybullet body for a scene body (static, at its start pose)."""
+@dataclass(frozen=True)
+class _Built:
+    """The pybullet bodies drawing one scene body, and the corners of what they draw."""
+
+    ids: tuple[int, ...]
+    corners: npt.NDArray[np.float64] | None = None  # meshes: from the files; else pybullet's
+
+
+def _build(client: int, body: Body) -> _Built:
+    """The pybullet bodies for a scene body (static, at its start pose)."""
     pose = (body.position, body.quat)
     shape = body.shape
-    r, g, b = body.color
-    color = (r / 255, g / 255, b / 255, 1.0)
     if isinstance(shape, Box):
         half = (shape.size[0] / 2, shape.size[1] / 2, shape.size[2] / 2)
-        return bodies.add_box(client, half, pose, color)
-    if isinstance(shape, Mesh):
-        if not shape.path.is_file():
-            raise ValueError(f"body {body.name}: no mesh file {shape.path}")
-        visual = p.createVisualShape(
-            p.GEOM_MESH,
-            fileName=str(shape.path),
-            meshScale=[shape.scale] * 3,
-            physicsClientId=client,
-        )
-        if visual < 0:
-            raise ValueError(f"body {body.name}: pybullet cannot read mesh {shape.path}")
-        return int(
-            p.createMultiBody(
-                baseVisualShapeIndex=visual,
-                basePosition=pose[0],
-                baseOrientation=pose[1],
-                physicsClientId=client,
-            )
-        )
+        return _Built((bodies.add_box(client, half, pose, _rgba(body.color)),))
+    if isinstance(shape, Mesh | Meshes):
+        parts = shape.parts if isinstance(shape, Meshes) else (shape,)
+        ids = tuple(_add_mesh(client, body, part) for part in parts)
+        corners = np.vstack([_mesh_corners(part, pose) for part in parts])
+        return _Built(ids, corners)
     if not shape.path.is_file():
         raise ValueError(f"body {body.name}: no URDF file {shape.path}")
     try:
@@ -131,16 +129,57 @@ def _build(client: int, body: Body) -> int:
     for name, value in shape.joints.items():
         if name in joints:
             p.resetJointState(uid, joints[name], value, physicsClientId=client)
-    return int(uid)
+    return _Built((int(uid),))
+
+
+def _rgba(rgb: tuple[int, int, int]) -> bodies.Color:
+    return (rgb[0] / 255, rgb[1] / 255, rgb[2] / 255, 1.0)
+
+
+def _add_mesh(client: int, body: Body, mesh: Mesh) -> int:
+    if not mesh.path.is_file():
+        raise ValueError(f"body {body.name}: no mesh file {mesh.path}")
+    visual = p.createVisualShape(
+        p.GEOM_MESH,
+        fileName=str(mesh.path),
+        meshScale=[mesh.scale] * 3,
+        rgbaColor=_rgba(mesh.color or body.color),
+        physicsClientId=client,
+    )
+    if visual < 0:
+        raise ValueError(f"body {body.name}: pybullet cannot read mesh {mesh.path}")
+    return int(
+        p.createMultiBody(
+            baseVisualShapeIndex=visual,
+            basePosition=body.position,
+            baseOrientation=body.quat,
+            physicsClientId=client,
+        )
+    )
+
+
+def _mesh_corners(
+    mesh: Mesh, pose: tuple[Vec3, tuple[float, float, float, float]]
+) -> npt.NDArray[np.float64]:
+    """The corners of a mesh file's bounding box, placed at ``pose`` (pybullet knows no bounds
+    of a body that only draws)."""
+    bounds = np.asarray(trimesh.load(str(mesh.path), force="mesh").bounds) * mesh.scale
+    local = np.array([(x, y, z) for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]])
+    rotation = np.array(p.getMatrixFromQuaternion(pose[1])).reshape(3, 3)
+    placed: npt.NDArray[np.float64] = local @ rotation.T + np.array(pose[0])
+    return placed
 
 
 # --- camera ----------------------------------------------------------------------------------
 
 
-def _corners(client: int, bodies_: Iterable[int]) -> npt.NDArray[np.float64]:
-    """The corners of every link's axis-aligned bounding box, one row each."""
+def _corners(client: int, built: _Built) -> npt.NDArray[np.float64]:
+    """The corners of what a scene body draws: its meshes' boxes, or every link's
+    axis-aligned bounding box (one row each)."""
+    if built.corners is not None:
+        return built.corners
     corners: list[tuple[float, float, float]] = []
-    for body in bodies_:
+    for body in built.ids:
         for link in range(-1, p.getNumJoints(body, physicsClientId=client)):
             lo, hi = p.getAABB(body, link, physicsClientId=client)
             corners += [
@@ -185,19 +224,22 @@ def _vec(a: npt.NDArray[np.float64]) -> Vec3:
 
 
 def _render(
-    client: int, subjects: list[int], width: int, height: int, floor_z: float = 0.0
+    client: int,
+    points: npt.NDArray[np.float64],
+    width: int,
+    height: int,
+    floor_z: float | None = 0.0,
 ) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.int32]]:
-    """RGB image (height x width x 3) and segmentation mask (body id per pixel, -1 for none)."""
-    points = _corners(client, subjects)
+    """RGB image (height x width x 3) and segmentation mask (body id per pixel, -1 for none) of
+    a camera that sees all ``points``; a grey floor at ``floor_z`` unless it is None (the scene
+    has its own)."""
     eye, target, up = _camera(points, width / height)
     lo, hi = points.min(axis=0), points.max(axis=0)
-    half = (
-        (hi[0] - lo[0]) / 2 + FLOOR_BORDER,
-        (hi[1] - lo[1]) / 2 + FLOOR_BORDER,
-        0.005,
-    )
-    floor_center = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, floor_z - half[2])
-    floor = bodies.add_box(client, half, (floor_center, (0.0, 0.0, 0.0, 1.0)), FLOOR_COLOR)
+    floor = None
+    if floor_z is not None:
+        half = ((hi[0] - lo[0]) / 2 + FLOOR_BORDER, (hi[1] - lo[1]) / 2 + FLOOR_BORDER, 0.005)
+        centre = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, floor_z - half[2])
+        floor = bodies.add_box(client, half, (centre, (0.0, 0.0, 0.0, 1.0)), FLOOR_COLOR)
     try:
         distance = math.dist(eye, target)
         view = p.computeViewMatrix(eye, target, up, physicsClientId=client)
@@ -219,7 +261,8 @@ def _render(
             physicsClientId=client,
         )
     finally:
-        p.removeBody(floor, physicsClientId=client)
+        if floor is not None:
+            p.removeBody(floor, physicsClientId=client)
     rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
     mask = np.asarray(seg, dtype=np.int32).reshape(height, width)
     rgb[mask < 0] = BACKGROUND

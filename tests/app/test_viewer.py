@@ -261,15 +261,32 @@ def test_calls_from_many_threads(
     assert {k: counts.get(k, 0) for k in _expected(events)} == _expected(events)
 
 
+def _scene_pixels(path: Path) -> np.ndarray:
+    """A screenshot's 3D view: without the GUI panel (top right) and viser's notice (top left)."""
+    image = iio.imread(path)[..., :3].astype(np.int16)
+    image[:360, 920:] = 0
+    image[:160, :330] = 0
+    return image
+
+
+def _changed(a: np.ndarray, b: np.ndarray) -> float:
+    """The share of pixels that differ visibly between two screenshots."""
+    return float(np.mean(np.abs(a - b).sum(axis=2) > 40))
+
+
 def test_the_view_renders_in_a_browser_and_plays(
     viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
 ) -> None:
+    """The kitchen-1 plan in Chromium: it plays, and the time slider takes it to its middle and
+    its end; screenshots of the start, the middle and the end go to test-artifacts/."""
     from playwright.sync_api import sync_playwright
 
     events, plan = kitchen_run
     viewer.show("kitchen-1", 0, events, plan)
+    duration = viewer.plan_seconds
+    assert duration is not None
     ARTIFACTS.mkdir(exist_ok=True)
-    shot = ARTIFACTS / "viewer.png"
+    shots = {name: ARTIFACTS / f"kitchen-{name}.png" for name in ("start", "mid", "end")}
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
         browser = pw.chromium.launch_persistent_context(
             profile,
@@ -282,20 +299,51 @@ def test_the_view_renders_in_a_browser_and_plays(
             page.goto(viewer.url)
             page.wait_for_selector("canvas", timeout=30_000)
             page.get_by_text("kitchen-1").first.wait_for(timeout=30_000)
+            notice = page.locator(".mantine-Notification-root button")  # "Software WebGL ..."
+            if notice.count():
+                notice.first.click()
+            time.sleep(3.0)  # the software renderer draws the meshes
+            page.screenshot(path=str(shots["start"]))
+
             page.get_by_role("button", name="Play").click()
             deadline = time.monotonic() + 10
             while viewer.playhead <= 0.5 and time.monotonic() < deadline:
                 time.sleep(0.1)
             assert viewer.playhead > 0.5  # the plan plays
+            page.get_by_role("button", name="Pause").click()
             time.sleep(1.5)  # a few frames of the software renderer
-            page.screenshot(path=str(shot))
+            page.screenshot(path=str(ARTIFACTS / "viewer.png"))
+
+            track = page.locator(".mantine-Slider-root").bounding_box()  # the Time slider
+            assert track is not None
+            page.mouse.click(track["x"] + track["width"] / 2, track["y"] + track["height"] / 2)
+            deadline = time.monotonic() + 10
+            while abs(viewer.playhead - duration / 2) > 0.1 * duration:
+                assert time.monotonic() < deadline, f"the slider left {viewer.playhead} s"
+                time.sleep(0.1)
+            time.sleep(1.5)
+            page.screenshot(path=str(shots["mid"]))
+
+            page.get_by_role("slider").focus()
+            page.keyboard.press("End")
+            deadline = time.monotonic() + 10
+            while viewer.playhead < duration:
+                assert time.monotonic() < deadline, f"End left the plan at {viewer.playhead} s"
+                time.sleep(0.1)
+            time.sleep(1.5)
+            page.screenshot(path=str(shots["end"]))
         finally:
             browser.close()
-    image = iio.imread(shot)
+    image = iio.imread(shots["start"])
     assert image.shape[0] == 800 and image.shape[1] == 1280
     pixels = image[..., :3].reshape(-1, 3)
     colours = np.unique(pixels[::97], axis=0)
     assert len(colours) > 20, "the screenshot is (nearly) one colour"
+    start, mid, end = (_scene_pixels(shots[name]) for name in ("start", "mid", "end"))
+    # The robot has gone somewhere by the middle, and somewhere else (the stove) by the end.
+    assert _changed(start, mid) > 0.005
+    assert _changed(mid, end) > 0.005
+    assert _changed(start, end) > 0.005
 
 
 def test_the_tutorial_domain_is_drawn_from_its_scene_description(viewer: RunViewer) -> None:

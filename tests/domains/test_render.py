@@ -5,14 +5,16 @@ from __future__ import annotations
 
 import struct
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from planner.cli import main
 from planner.domains import problem_for_scene
 from planner.scene import SceneError
-from planner.sim.render import RenderInfo
+from planner.sim.render import BACKGROUND, RenderInfo
 from planner.sim.render import render_scene as render_view
 
 
@@ -67,6 +69,26 @@ def test_robot_fixtures_and_every_block_are_visible(seed3: RenderInfo) -> None:
     small = {name: n for name, n in seed3.pixels.items() if n < MIN_PIXELS}
     assert not small, f"barely visible: {small}"
     assert seed3.hidden(MIN_PIXELS) == ()
+
+
+@pytest.mark.slow
+def test_the_kitchen_stands_on_its_tiled_floor(seed3: RenderInfo, tmp_path: Path) -> None:
+    """The scene's floor is drawn instead of the renderer's plain grey plane: the front of the
+    picture shows its two tones of tile (the plane would be one), and the light background
+    only beyond its edges."""
+    loaded, problem = problem_for_scene("kitchen-4", seed=3)
+    assert loaded.spec.view is not None
+    view = loaded.spec.view.scene(problem)
+    plain = render_view(
+        replace(view, floor=None), out=tmp_path / "plain.png", width=WIDTH, height=HEIGHT
+    )
+    for info, tones in ((seed3, 2), (plain, 1)):
+        width, height, raw = read_png(info.path)
+        image = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 3 * width)[:, 1:]
+        image = image.reshape(height, width, 3)
+        assert len(np.unique(image[-20:].reshape(-1, 3) // 8, axis=0)) == tones
+        background = np.all(image == BACKGROUND, axis=2).mean()
+        assert background < 0.25 if tones == 2 else background == 0.0
 
 
 @pytest.mark.slow

@@ -74,14 +74,26 @@ def _random_arm_conf(rng: np.random.Generator, arm: str) -> tuple[float, ...]:
 # --- the file ---------------------------------------------------------------------------------
 
 
-def test_committed_urdf_matches_generator() -> None:
+def test_committed_urdf_and_meshes_match_generator() -> None:
     assert m.URDF_PATH.read_text(encoding="utf-8") == m.generate_pr2_urdf(), (
         f"{m.URDF_PATH} is stale: regenerate it with `python -m planner.sim.pr2_model --write`"
     )
+    assert m.stale_files() == [], "regenerate with `python -m planner.sim.pr2_model --write`"
+    assert m.generated_files() == m.generated_files()  # the same bytes every time
 
 
-def test_check_cli_reports_up_to_date_file() -> None:
+def test_check_cli_reports_up_to_date_files() -> None:
     assert m.main(["--check"]) == 0
+
+
+def test_check_cli_names_a_stale_mesh(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    files = m.generated_files()
+    mesh = next(path for path in files if path.suffix == ".obj")
+    monkeypatch.setattr(m, "generated_files", lambda: {**files, mesh: files[mesh] + "# edited"})
+    assert m.main(["--check"]) == 1
+    assert f"{mesh.name} is stale" in capsys.readouterr().err
 
 
 def test_constants_describe_two_seven_dof_arms() -> None:

@@ -1,5 +1,6 @@
-"""The kitchen in the 3D view (``DomainSpec.view``): platforms, blocks and the generated PR2; the
-ghosts of sampled values; a bound plan played by the robot.
+"""The kitchen in the 3D view (``DomainSpec.view``): platforms, blocks and the floor (meshes,
+:mod:`planner.domains.kitchen.props`) and the generated PR2; the ghosts of sampled values; a bound
+plan played by the robot.
 
 Ghosts: a placement is a translucent block where it would stand (layer ``placements``), a grasp
 the gripper around the block's initial pose (``grasps``), an IK result an arrow at the base pose
@@ -23,6 +24,7 @@ from typing import Any, TypeVar
 from planner.abstract.skeleton import GroundAction
 from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
 from planner.domains.kitchen.problem import ARM, GEOMETRY_KEY, initial_pose_name
+from planner.domains.kitchen.props import block_shape, floor_body, platform_body
 from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
 from planner.pddl.structs import Problem
 from planner.sim.pr2_model import (
@@ -38,7 +40,7 @@ from planner.sim.pr2_model import (
     VELOCITY_LIMITS,
 )
 from planner.sim.transforms import Pose, invert, multiply, planar_pose, wrap_angle
-from planner.view import Body, BodyState, Box, Marker, QueryView, SceneView, Urdf, Vec3
+from planner.view import Body, BodyState, Marker, QueryView, SceneView, Urdf, Vec3
 
 T = TypeVar("T")
 Held = tuple[str, Grasp]  # a block in the hand and how it is held
@@ -74,10 +76,6 @@ def _initial(problem: Problem, geometry: KitchenGeometry) -> dict[str, BlockPose
     return out
 
 
-def _rgb(color: Sequence[float]) -> tuple[int, int, int]:
-    return (int(color[0] * 255), int(color[1] * 255), int(color[2] * 255))
-
-
 def robot_joints(torso: float, arm: Sequence[float], gripper: float) -> dict[str, float]:
     """The PR2's joint values: the working arm as given, the other tucked, fingers open by
     ``gripper`` each."""
@@ -98,24 +96,12 @@ class KitchenView:
 
     def scene(self, problem: Problem) -> SceneView:
         geometry = _geometry(problem)
-        bodies = []
-        for plat in geometry.platforms:
-            (px, py), (sx, sy, h) = plat.center, plat.size
-            bodies.append(
-                Body(
-                    f"platform-{plat.name}",
-                    Box((sx, sy, h)),
-                    (px, py, h / 2),
-                    color=_rgb(plat.color),
-                    label=plat.name,
-                )
-            )
+        robot = (geometry.robot.base[0], geometry.robot.base[1])
+        bodies = [platform_body(plat, robot) for plat in geometry.platforms]
         for block in geometry.blocks:
             pose = _initial(problem, geometry).get(block.name)
             position, quat = block_pose_to_pose(pose) if pose else ((0.0, 0.0, 0.0), (0, 0, 0, 1))
-            bodies.append(
-                Body(block.name, Box((block.size,) * 3), position, quat, color=_rgb(block.color))
-            )
+            bodies.append(Body(block.name, block_shape(block), position, quat))
         base = planar_pose(*geometry.robot.base)
         joints = robot_joints(geometry.robot.torso, REST_ARM_CONF[ARM], FINGER_TRAVEL)
         bodies.append(Body(ROBOT, Urdf(URDF_PATH, joints), base[0], base[1]))
@@ -124,7 +110,7 @@ class KitchenView:
         cy = (min(ys) + max(ys)) / 2
         cx = (min(xs) + max(xs)) / 2
         camera = ((min(xs) - 1.9, cy - 1.5, 2.4), (cx + 0.5, cy, 0.9))
-        return SceneView(tuple(bodies), camera=camera)
+        return SceneView(tuple(bodies), camera=camera, floor=floor_body(geometry))
 
     def markers(self, query: QueryView, problem: Problem) -> Sequence[Marker]:
         geometry = _geometry(problem)
