@@ -73,6 +73,12 @@ class Evidence:
     _member_set: set[int] = field(default_factory=set)
     _stale_groups: set[tuple[int, int]] = field(default_factory=set)
     _culprits: dict[tuple[int, int], list[tuple[Node, set[str]]]] = field(default_factory=dict)
+    # Per query identity: its attempts that failed (with the least depth among them) and those
+    # that succeeded; per node: how many failures in a row make it a dead end.
+    _attempts_failed: dict[str, list[int]] = field(default_factory=dict)
+    _failed_depth: dict[str, int] = field(default_factory=dict)
+    _attempts_ok: dict[str, list[int]] = field(default_factory=dict)
+    _threshold: dict[int, int] = field(default_factory=dict)
 
     def add_maker(self, key: str, node: int) -> None:
         """``node``'s children are attempts of the query ``key``."""
@@ -151,10 +157,16 @@ class Evidence:
             self._failing.discard(parent)
         elif not any(tree[c].success for c in tree[parent].children):
             self._failing.add(parent)
-        if not node.success:
-            key = self._maker_key(tree, parent)
-            if key is not None:
+        key = self._maker_key(tree, parent)
+        if key is not None:
+            if node.success:
+                self._attempts_ok.setdefault(key, []).append(node.id)
+            else:
                 self._failed_keys.add(key)
+                self._attempts_failed.setdefault(key, []).append(node.id)
+                depth_now = self._failed_depth.get(key)
+                if depth_now is None or node.depth < depth_now:
+                    self._failed_depth[key] = node.depth
         maker = tree[parent]
         if maker.success and maker.depth > 0 and self.queries.first(maker) is not None:
             group = (maker.plan_index, maker.depth)
@@ -169,6 +181,12 @@ class Evidence:
     def _dead_after(self, cost: StreamCost) -> int:
         prior = cost.p_prior if self.use_prior else None
         return dead_after(cost.p_s, p_prior=prior, p_min=self.p_min, p_max=self.p_max)
+
+    def _threshold_of(self, node: Node, first: StreamCost) -> int:
+        found = self._threshold.get(node.id)
+        if found is None:
+            found = self._threshold[node.id] = self._dead_after(first)
+        return found
 
     def _dead_ends(self, tree: Tree, touched: set[int]) -> set[int]:
         """Nodes whose every continuation is taken to fail (see the module), to a fixpoint: a
@@ -202,7 +220,7 @@ class Evidence:
                     continue
                 key = self.queries.key(node)
                 failures = max(len(node.children), pooled.get(key, 0) if key is not None else 0)
-                if failures < self._dead_after(first):
+                if failures < self._threshold_of(node, first):
                     continue
                 reason = self.queries.relevant(node)
                 depth = min(origin.get(c, tree[c].depth) for c in node.children)
@@ -233,15 +251,17 @@ class Evidence:
         out: dict[str, int] = {}
         deepest = self._deepest
         for key in keys:
-            children = [c for n in self.groups.get(key, ()) for c in tree[n].children]
-            bad = [c for c in children if not tree[c].success or c in dead]
-            if not bad:
+            failed = self._attempts_failed.get(key, ())
+            ok = self._attempts_ok.get(key, ())
+            dead_ok = [c for c in ok if c in dead]
+            if not failed and not dead_ok:
                 continue
-            depth = min(origin.get(c, tree[c].depth) for c in bad)
-            if not any(
-                tree[c].success and c not in dead and deepest.get(c, -1) >= depth for c in children
-            ):
-                out[key] = len(bad)
+            depths = [origin.get(c, tree[c].depth) for c in dead_ok]
+            if failed:
+                depths.append(self._failed_depth[key])
+            depth = min(depths)
+            if not any(c not in dead and deepest.get(c, -1) >= depth for c in ok):
+                out[key] = len(failed) + len(dead_ok)
         return out
 
     def _signature(self, tree: Tree, node: Node) -> tuple[dict[str, str], dict[str, int]]:
