@@ -79,6 +79,7 @@ class Evidence:
     _failed_depth: dict[str, int] = field(default_factory=dict)
     _attempts_ok: dict[str, list[int]] = field(default_factory=dict)
     _threshold: dict[int, int] = field(default_factory=dict)
+    _keys: dict[int, str] = field(default_factory=dict)  # node -> its next query's identity
 
     def add_maker(self, key: str, node: int) -> None:
         """``node``'s children are attempts of the query ``key``."""
@@ -139,7 +140,12 @@ class Evidence:
         """The identity of the query ``node_id``'s children are attempts of (None: none)."""
         if node_id == ROOT:
             return None
-        return self.queries.key(tree[node_id])
+        found = self._keys.get(node_id)
+        if found is None:
+            found = self.queries.key(tree[node_id])
+            if found is not None:  # known once the node is predicted, and fixed from then on
+                self._keys[node_id] = found
+        return found
 
     def _grow(self, tree: Tree, node: Node) -> None:
         """Take in a new node: the deepest success below each ancestor, which nodes have only
@@ -218,7 +224,7 @@ class Evidence:
                     continue  # complete, or not queried from yet
                 if any(tree[c].success and c not in dead for c in node.children):
                     continue
-                key = self.queries.key(node)
+                key = self._maker_key(tree, node.id)
                 failures = max(len(node.children), pooled.get(key, 0) if key is not None else 0)
                 if failures < self._threshold_of(node, first):
                     continue

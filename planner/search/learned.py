@@ -301,6 +301,7 @@ class LearnedPolicy:
     _by_ident: dict[str, set[int]] = field(default_factory=dict)
     _seen: int = 0
     _any: bool = False  # whether any outcome was known at the last refresh
+    _relevant_at: dict[tuple[int, int], frozenset[str]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         c = self.config
@@ -621,14 +622,18 @@ class LearnedPolicy:
 
     def _relevant(self, node: Node) -> set[str]:
         """Objects the outcome of ``node``'s next query depends on: its inputs and the objects of
-        the state facts that make up its identity (see :meth:`_key`)."""
-        inst = self.skeletons[node.plan_index].stream_plan[node.depth]
-        facts = self.states[node.plan_index][node.depth]
-        out = set(inst.inputs)
-        for a in facts:
-            if a.predicate in self.fluents and a.predicate not in self.evidence_ignore:
-                out.update(a.args)
-        return out
+        the state facts that make up its identity (see :meth:`_key`); a fresh set each call."""
+        where = (node.plan_index, node.depth)
+        found = self._relevant_at.get(where)
+        if found is None:
+            inst = self.skeletons[node.plan_index].stream_plan[node.depth]
+            facts = self.states[node.plan_index][node.depth]
+            out = set(inst.inputs)
+            for a in facts:
+                if a.predicate in self.fluents and a.predicate not in self.evidence_ignore:
+                    out.update(a.args)
+            found = self._relevant_at[where] = frozenset(out)
+        return set(found)
 
     def _estimate(self, tree: Tree, node: Node) -> float:
         """The node's estimate as of the last refresh (its Q before the first)."""
