@@ -507,3 +507,22 @@ def test_a_success_under_the_shared_choices_clears_them() -> None:
     policy.pick_plan(tree)
     assert placed_a.id not in policy.dead
     assert not policy.expand(tree, choose_a)
+
+
+def test_every_node_a_rollout_makes_gets_a_prediction() -> None:
+    """The page colours every node by its predicted cost: the nodes of the last rollout (the
+    solution's branch) are predicted too, though the search ends with that rollout."""
+    sink = ListSink()
+    search, _ = make(sink)
+    result = search.run(deadline=time.perf_counter() + 30)
+    assert result.solved
+    predicted = {e.node_id for e in sink.events if isinstance(e, ModelPrediction)}
+    tree = search.tree
+    branch = tree.path(result.node_id or 0)[1:-1]  # below the root, above the bound leaf
+    assert branch and set(branch) <= predicted
+    made = [
+        n.id
+        for n in tree.nodes[1:]
+        if n.success and n.depth < len(search.skeletons[n.plan_index].stream_plan)
+    ]
+    assert set(made) <= predicted
