@@ -1,5 +1,7 @@
 """The learned policy's arithmetic (Eq. 1 and 4) and decisions, with a hand-written predictor
-standing in for trained models on the pure-Python line domain."""
+standing in for trained models on the pure-Python line domain. Each named part of
+``LearnedConfig`` has a test here (or in test_reuse.py, test_order.py and
+test_language_search.py) whose outcome changes when the part is switched off."""
 
 from __future__ import annotations
 
@@ -22,7 +24,6 @@ from planner.search.learned import (
     LearnedConfig,
     LearnedPolicy,
     StreamCost,
-    dead_after,
     remaining_cost,
     with_dead_ends,
 )
@@ -98,7 +99,9 @@ class ReachOracle(CountingPredictor):
         return StreamCost(1.0, 0.01, 0.01, 0.0)
 
 
-def make(sink: ListSink, predictor: Any = None) -> tuple[TreeSearch, LearnedPolicy]:
+def make(
+    sink: ListSink, predictor: Any = None, config: LearnedConfig | None = None
+) -> tuple[TreeSearch, LearnedPolicy]:
     loaded, problem = problem_for_scene(SCENE, seed=3)
     plans = plan_abstract(loaded.domain, loaded.streams, problem, AbstractConfig(k=4)).plans
     states = [stream_contexts(p, loaded.domain, problem) for p in plans]
@@ -123,6 +126,7 @@ def make(sink: ListSink, predictor: Any = None) -> tuple[TreeSearch, LearnedPoli
         values,
         lambda v: v,
         frozenset({"at", "in", "holding", "hand-empty"}),
+        config or LearnedConfig(),
         on_prediction=emit,
     )
     search = TreeSearch(
@@ -231,8 +235,11 @@ def test_failures_make_insisting_costlier_and_a_success_makes_it_cheaper() -> No
     assert after_attempts(cost, 1, 3) < after_attempts(cost, 0, 3)
 
 
-def test_the_same_query_from_two_nodes_pools_its_outcomes() -> None:
-    search, policy = make(ListSink())
+@pytest.mark.parametrize("pooled", [True, False])
+def test_the_same_query_from_two_nodes_pools_its_outcomes(pooled: bool) -> None:
+    """pooled_evidence: the failures of a query made from one node make the same query from
+    another node look costlier too; off, each node learns from its own attempts only."""
+    search, policy = make(ListSink(), config=LearnedConfig(pooled_evidence=pooled))
     tree = search.tree
     node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
     first = tree.add(node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 2.0})
@@ -243,15 +250,21 @@ def test_the_same_query_from_two_nodes_pools_its_outcomes() -> None:
         tree.add(first.id, plan_index=0, depth=i + 2, success=False)
     policy.pick_plan(tree)  # each iteration starts by counting the outcomes so far
     after = [policy.q(tree, n) for n in (first, twin, other)]
-    assert after[0] > before[0] and after[1] == pytest.approx(after[0])  # the twin learns too
+    assert after[0] > before[0]
+    if pooled:
+        assert after[1] == pytest.approx(after[0])  # the twin learns too
+    else:
+        assert after[1] == pytest.approx(before[1])  # the twin has not tried
     assert after[2] == pytest.approx(before[2])  # another query does not
 
 
-def test_a_dead_end_blames_the_last_choice_it_depends_on() -> None:
-    """Backjumping: b's poses fail their reach test whatever is tried, and the test depends on
-    where a stands (a fact of its state); the choices in between bind nothing it reads, so the
-    doubt lands on a's pose, and sampling a new pose for a becomes the better action."""
-    search, policy = make(ListSink())
+@pytest.mark.parametrize("dead_ends", [True, False])
+def test_a_dead_end_blames_the_last_choice_it_depends_on(dead_ends: bool) -> None:
+    """dead_ends (backjumping): b's poses fail their reach test whatever is tried, and the test
+    depends on where a stands (a fact of its state); the choices in between bind nothing it
+    reads, so the doubt lands on a's pose, and sampling a new pose for a becomes the better
+    action. Off: the search goes on trying b."""
+    search, policy = make(ListSink(), config=LearnedConfig(dead_ends=dead_ends))
     tree = search.tree
     plan = search.skeletons[0]
     streams = [s.stream for s in plan.stream_plan]
@@ -284,14 +297,27 @@ def test_a_dead_end_blames_the_last_choice_it_depends_on() -> None:
     assert policy.q(tree, choose_a) == pytest.approx(q_before)  # once is chance
     tree.add(poses_b[1].id, plan_index=0, depth=6, success=False)
     policy.pick_plan(tree)
+    if not dead_ends:
+        assert policy.q(tree, choose_a) == pytest.approx(q_before) and not policy.dead
+        assert not policy.expand(tree, choose_a)
+        return
     assert policy.q(tree, choose_a) > 2 * q_before
     assert policy.expand(tree, choose_a)  # now: sample another pose for a
 
 
 def test_a_bound_trajectory_counts_its_execution_seconds() -> None:
-    """Total time is planning plus execution: of two bindings alike but for how long the robot
-    will take to execute them, the policy goes on with the shorter one, and a long one makes
-    binding it again worth its planning seconds."""
+    """bound_execution: total time is planning plus execution: of two bindings alike but for
+    how long the robot will take to execute them, the policy goes on with the shorter one, and a
+    long one makes binding it again worth its planning seconds. Off, the two look the same."""
+    off, off_policy = make(ListSink(), config=LearnedConfig(bound_execution=False))
+    node, i, pose = up_to_first_pose(off.tree, off.skeletons[0], 0)
+    slow, quick = (
+        off.tree.add(
+            node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=s
+        )
+        for s in (9.0, 2.0)
+    )
+    assert off_policy.q(off.tree, slow) == pytest.approx(off_policy.q(off.tree, quick))
     search, policy = make(ListSink())
     tree = search.tree
     node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
@@ -317,26 +343,57 @@ def test_a_bound_trajectory_counts_its_execution_seconds() -> None:
     assert policy.expand(tree, other)
 
 
+class SureOracle(ReachOracle):
+    """Like :class:`ReachOracle`, but b's reach test is sure to pass (P_S 0.999), and its
+    stream usually passes 90% of the time; with ``doubt``, the model instead predicts 0.03 for
+    it (far below the usual rate: it foresees the failure)."""
+
+    def __init__(self, doubt: bool = False) -> None:
+        super().__init__()
+        self.doubt = doubt
+
+    def cost(
+        self, stream: str, inputs: Sequence[Any | None], context: Mapping[str, Any]
+    ) -> StreamCost:
+        if stream == "test-reachable" and isinstance(inputs[1], float) and inputs[1] > 1.0:
+            return StreamCost(0.03 if self.doubt else 0.999, 0.01, 0.01, 0.0, p_prior=0.9)
+        return super().cost(stream, inputs, context)
+
+
+def _failing_b(config: LearnedConfig, doubt: bool, failures: int) -> tuple[LearnedPolicy, Any]:
+    """b's reach test at a pose of 1.5 fails ``failures`` times: (policy, the node making it)."""
+    search, policy = make(ListSink(), SureOracle(doubt), config)
+    tree = search.tree
+    plan = search.skeletons[0]
+    a_pose, b_pose = plan.stream_plan[1].outputs[0], plan.stream_plan[4].outputs[0]
+    node = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    for depth, outputs in enumerate(({}, {a_pose: 0.5}, {}, {}, {b_pose: 1.5}), start=1):
+        node = tree.add(node.id, plan_index=0, depth=depth, success=True, outputs=outputs)
+    for _ in range(failures):
+        tree.add(node.id, plan_index=0, depth=6, success=False)
+    policy.pick_plan(tree)
+    return policy, node
+
+
 def test_one_failure_is_never_a_dead_end() -> None:
     """However sure the model is, a node becomes a dead end only after failures in a row: one
-    failed placement predicted at 0.98 is chance (a try landing where a block stands), not a
-    reason to throw the bound plan away. Less likely streams need more failures (Eq.: the least
-    n with (1 - P_S)^n < 0.1)."""
-    assert dead_after(0.999) == dead_after(0.98) == 2
-    assert dead_after(0.65) == 3
-    assert dead_after(0.2) == 11
+    failed query predicted at 0.999 is chance (a try landing where a block stands), not a
+    reason to throw a bound plan away; two are a dead end."""
+    policy, tester = _failing_b(LearnedConfig(), doubt=False, failures=1)
+    assert tester.id not in policy.dead
+    policy, tester = _failing_b(LearnedConfig(), doubt=False, failures=2)
+    assert tester.id in policy.dead
 
 
-def test_a_failure_the_model_foresaw_is_a_dead_end_sooner() -> None:
-    """A query predicted far below its stream's usual rate is, to the model, likely a dead end;
-    failures confirm it: a placement predicted at 0.03 on a full stove (usual rate 0.91) is a
-    dead end after 2 failures, not after the 76 that make such a run unlikely under 0.03
-    (kitchen-4 seed 1003 failed 60 placements). At or above the usual rate, nothing changes."""
-    assert dead_after(0.03) == 76
-    assert dead_after(0.03, p_prior=0.907) == 2
-    assert dead_after(0.3, p_prior=0.62) == 3 < dead_after(0.3) == 7
-    assert dead_after(0.5, p_prior=0.62) == dead_after(0.5) == 4
-    assert dead_after(0.98, p_prior=0.9) == dead_after(0.98) == 2
+@pytest.mark.parametrize("prior", [True, False])
+def test_a_failure_the_model_foresaw_is_a_dead_end_sooner(prior: bool) -> None:
+    """dead_end_prior: a query predicted far below its stream's usual rate (0.03 against 0.9)
+    is, to the model, likely a dead end, and failures confirm it: two make it one. Without the
+    prior, two failures are what 0.03 explains: the search goes on insisting (76 would be
+    needed)."""
+    config = LearnedConfig(dead_end_prior=prior)
+    policy, tester = _failing_b(config, doubt=True, failures=2)
+    assert (tester.id in policy.dead) is prior
 
 
 class CrowdedOracle(ReachOracle):
@@ -356,10 +413,12 @@ class CrowdedOracle(ReachOracle):
         ]
 
 
-def crowded_search() -> tuple[TreeSearch, LearnedPolicy, str, Any]:
+def crowded_search(
+    config: LearnedConfig | None = None,
+) -> tuple[TreeSearch, LearnedPolicy, str, Any]:
     """A line search under :class:`CrowdedOracle`: (search, policy, a's pose object, the first
     plan's node, added by hand)."""
-    search, policy = make(ListSink())
+    search, policy = make(ListSink(), config=config)
     policy.predictor = CrowdedOracle()
     a_pose = search.skeletons[0].stream_plan[1].outputs[0]
     top = search.tree.add(ROOT, plan_index=0, depth=0, success=True)
@@ -391,13 +450,16 @@ def test_the_same_query_failing_under_choices_it_does_not_read_is_a_dead_end() -
     assert policy.expand(tree, choose_a)  # now: sample another pose for a
 
 
-def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> None:
-    """A new child is predicted from masked inputs; children that all come out seconds worse
-    (here: poses the model expects to execute in no time take 5 to 7 s) raise the cost of
-    querying again, so after a few the search goes on with the best one instead of sampling
-    for ever in the hope of the predicted average (kitchen-4 seed 1027)."""
-    search, policy = make(ListSink())
-    policy.config = LearnedConfig(c_explore=0.0)  # values only: no exploration bonus
+@pytest.mark.parametrize("calibration", [True, False])
+def test_children_worse_than_predicted_make_querying_again_look_worse_too(
+    calibration: bool,
+) -> None:
+    """calibration: a new child is predicted from masked inputs; children that all come out
+    seconds worse (here: poses the model expects to execute in no time take 5 to 7 s) raise the
+    cost of querying again, so after a few the search goes on with the best one instead of
+    sampling for ever in the hope of the predicted average. Off, it keeps sampling."""
+    config = LearnedConfig(c_explore=0.0, calibration=calibration)  # values only: no bonus
+    search, policy = make(ListSink(), config=config)
     tree = search.tree
     node, i, pose = up_to_first_pose(tree, search.skeletons[0], 0)
     policy.pick_plan(tree)
@@ -412,6 +474,15 @@ def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> N
     for kid in kids:
         kid.visits = 1
     policy.pick_plan(tree)
+    if not calibration:
+        assert policy.q(tree, node) == pytest.approx(alone)
+        best = tree.add(
+            node.id, plan_index=0, depth=i + 1, success=True, outputs={pose: 1.5}, execution_s=5.0
+        )
+        best.visits, node.visits = 1, 4
+        policy.pick_plan(tree)
+        assert policy.expand(tree, node)  # the predicted average looks better than any child
+        return
     # the two surprises, 7 s and 6 s, over 2 children plus the half a child the guess weighs
     assert policy.q(tree, node) == pytest.approx(alone + (7.0 + 6.0) / 2.5, abs=0.05)
     assert policy.expand(tree, node)  # two so far: the model's guess still weighs
@@ -424,14 +495,18 @@ def test_children_worse_than_predicted_make_querying_again_look_worse_too() -> N
     assert policy.pick_child(tree, node).id == best.id
 
 
-def test_an_attempt_that_has_not_reached_the_failures_does_not_stop_the_pooling() -> None:
+@pytest.mark.parametrize("pooled", [True, False])
+def test_an_attempt_that_has_not_reached_the_failures_does_not_stop_the_pooling(
+    pooled: bool,
+) -> None:
     """Three nodes make the same query (a's pose, after the same test). Two of its results led
     to dead ends (b's pose finds no room, twice each); the third has not been tried further
     yet. That fresh attempt proves nothing, so the failures still pool and the makers of the
     doomed results are dead ends (kitchen-4 seed 1025: every re-sampled grasp made a new maker
     of the third block's stove placement, and its unexplored child kept the crowded stove from
-    being blamed for 521 placements)."""
-    search, policy, a_pose, top = crowded_search()
+    being blamed for 521 placements). Without pooled_evidence, each maker counts its own two
+    failures only, too few to be a dead end."""
+    search, policy, a_pose, top = crowded_search(LearnedConfig(pooled_evidence=pooled))
     tree = search.tree
     makers = [tree.add(top.id, plan_index=0, depth=1, success=True) for _ in range(3)]
     placed = [
@@ -448,18 +523,21 @@ def test_an_attempt_that_has_not_reached_the_failures_does_not_stop_the_pooling(
         node.visits = 3
     policy.pick_plan(tree)
     dead = policy.dead
+    if not pooled:
+        assert makers[0].id not in dead and makers[2].id not in dead
+        return
     assert placed[0].id in dead and placed[2].id in dead and placed[1].id not in dead
     assert makers[0].id in dead and makers[2].id in dead  # one dead child each, pooled to two
     assert makers[1].id not in dead  # its own attempt is still open
 
 
 def shared_pose_tree(
-    b_poses: Sequence[float],
+    b_poses: Sequence[float], config: LearnedConfig | None = None
 ) -> tuple[LearnedPolicy, Any, Any, Any, list[Any]]:
     """a placed at 2.0 once; below it, one branch per pose of b in ``b_poses``, each up to
     b's reach test: (policy, tree, the node choosing a's pose, the node binding it, the nodes
     making b's reach test)."""
-    search, policy = make(ListSink())
+    search, policy = make(ListSink(), config=config)
     tree = search.tree
     plan = search.skeletons[0]
     a_pose, b_pose = plan.stream_plan[1].outputs[0], plan.stream_plan[4].outputs[0]
@@ -477,14 +555,18 @@ def shared_pose_tree(
     return policy, tree, choose_a, placed_a, testers
 
 
-def test_a_query_failing_under_varied_later_choices_blames_the_earlier_ones_it_shares() -> None:
+@pytest.mark.parametrize("shared", [True, False])
+def test_a_query_failing_under_varied_later_choices_blames_the_earlier_ones_it_shares(
+    shared: bool,
+) -> None:
     """b's reach test reads a's pose and b's. It fails once under each of three poses of b the
     model takes for reachable: no single query failed twice, but every failure shared a's pose,
     so a's pose is the dead end and the search samples a new one (kitchen-4 seed 1009 with 96
     IK base poses: the last block's stove placement failed 99 times, each under a new place of
     the block before it, while the first blocks' places that left no room were never
-    re-sampled)."""
-    policy, search_tree, choose_a, placed_a, testers = shared_pose_tree([1.5, 1.7, 1.9])
+    re-sampled). Without shared_culprits nothing blames a's pose."""
+    config = LearnedConfig(shared_culprits=shared)
+    policy, search_tree, choose_a, placed_a, testers = shared_pose_tree([1.5, 1.7, 1.9], config)
     for node in testers[:2]:
         search_tree.add(node.id, plan_index=0, depth=6, success=False)
     policy.pick_plan(search_tree)
@@ -492,6 +574,10 @@ def test_a_query_failing_under_varied_later_choices_blames_the_earlier_ones_it_s
     assert not policy.expand(search_tree, choose_a)
     search_tree.add(testers[2].id, plan_index=0, depth=6, success=False)
     policy.pick_plan(search_tree)
+    if not shared:
+        assert placed_a.id not in policy.dead
+        assert not policy.expand(search_tree, choose_a)
+        return
     assert placed_a.id in policy.dead and all(t.id in policy.dead for t in testers)
     assert choose_a.id not in policy.dead  # the one to choose again
     assert policy.expand(search_tree, choose_a)  # now: sample another pose for a
@@ -526,3 +612,40 @@ def test_every_node_a_rollout_makes_gets_a_prediction() -> None:
         if n.success and n.depth < len(search.skeletons[n.plan_index].stream_plan)
     ]
     assert set(made) <= predicted
+
+
+@pytest.mark.parametrize("subtree_min", [True, False])
+def test_progress_below_a_node_makes_it_the_one_to_follow(subtree_min: bool) -> None:
+    """subtree_min: two results of the same first test look alike, but below one of them the
+    search has already bound a reachable pose for a: its subtree's lowest Q vouches for it, and
+    the policy follows it. Off, each is judged by its own Q, the same for both, and the first
+    one made wins the tie."""
+    config = LearnedConfig(c_explore=0.0, calibration=False, subtree_min=subtree_min)
+    search, policy = make(ListSink(), config=config)
+    tree = search.tree
+    plan = search.skeletons[0]
+    a_pose = plan.stream_plan[1].outputs[0]
+    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    untried = tree.add(top.id, plan_index=0, depth=1, success=True)
+    explored = tree.add(top.id, plan_index=0, depth=1, success=True)
+    placed = tree.add(explored.id, plan_index=0, depth=2, success=True, outputs={a_pose: 1.0})
+    for node in (top, untried, explored, placed):
+        node.visits = 2
+    policy.pick_plan(tree)
+    assert policy.q(tree, untried) == pytest.approx(policy.q(tree, explored))
+    assert policy.pick_child(tree, top).id == (explored.id if subtree_min else untried.id)
+
+
+@pytest.mark.parametrize("clamp", [True, False])
+def test_a_near_zero_prediction_does_not_make_a_cheap_query_look_endless(clamp: bool) -> None:
+    """p_clamp: a query the model gives P_S of 1e-9, at a millisecond a try, costs 49 ms by Eq.
+    1 with P_S clamped at 0.02 (cheaper than a one-second query the model is sure of: worth a
+    try); without the clamp (only the floor of 1e-6) it costs 1,000 s, and nothing makes it
+    worth trying."""
+    from planner.search.costs import expected
+
+    config = LearnedConfig(p_clamp=clamp)
+    hopeless = expected(StreamCost(1e-9, 0.001, 0.001, 0.0), p_min=config.p_min)
+    sure = expected(StreamCost(1.0, 1.0, 1.0, 0.0), p_min=config.p_min)
+    assert (hopeless < sure) is clamp
+    assert hopeless == pytest.approx(0.001 + 0.98 / 0.02 * 0.001 if clamp else 1000.0, rel=1e-3)

@@ -174,6 +174,10 @@ def test_an_unknown_order_or_a_model_order_for_sequential_is_refused() -> None:
     with pytest.raises(ValueError, match="tree searches"):
         RunConfig(scene="kitchen-1", planner="sequential", order="model")
     assert RunConfig(scene="kitchen-1", planner="learned").stream_order == "model"
+    # model_order is the learned planner's part; the paper's planner keeps the plans' order.
+    assert RunConfig(scene="kitchen-1", planner="learned:model_order=off").stream_order == "plan"
+    assert RunConfig(scene="kitchen-1", planner="paper").stream_order == "plan"
+    assert RunConfig(scene="kitchen-1", planner="paper:model_order=on").stream_order == "model"
     assert RunConfig(scene="kitchen-1").stream_order == "plan"
     assert RunConfig(scene="kitchen-1", order="model").stream_order == "model"
 

@@ -15,7 +15,7 @@ from planner.abstract import AbstractConfig, plan_abstract
 from planner.events import Emitter, ListSink, StreamQueried
 from planner.pddl.parser import parse_domain, parse_problem, parse_streams
 from planner.search.binding import stream_contexts
-from planner.search.learned import LearnedPolicy, StreamCost
+from planner.search.learned import LearnedConfig, LearnedPolicy, StreamCost
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch
 from planner.search.tree import ROOT
 from planner.store import RunStore, StoreSink
@@ -69,7 +69,11 @@ class Guess:
 
 
 def make(
-    sink: ListSink | StoreSink | None = None, run_id: str = "r", *, learned: bool = False
+    sink: ListSink | StoreSink | None = None,
+    run_id: str = "r",
+    *,
+    learned: bool = False,
+    config: LearnedConfig | None = None,
 ) -> tuple[TreeSearch, list[Any]]:
     domain = parse_domain(DOMAIN)
     streams = parse_streams(STREAMS, domain)
@@ -89,7 +93,9 @@ def make(
     states = [stream_contexts(p, domain, problem) for p in plans]
     fluents = frozenset({"at-conf", "visited"})
     policy: Policy = (
-        LearnedPolicy(Guess(), plans, states, values, str, fluents) if learned else BaselinePolicy()
+        LearnedPolicy(Guess(), plans, states, values, str, fluents, config or LearnedConfig())
+        if learned
+        else BaselinePolicy()
     )
     search = TreeSearch(
         plans,
@@ -151,8 +157,14 @@ def test_without_reuse_every_query_runs_its_sampler() -> None:
     assert len(motions) == 2
 
 
-def test_the_learned_policy_counts_a_result_it_will_reuse_at_its_execution_seconds() -> None:
-    search, _ = make(learned=True)
+@pytest.mark.parametrize("reuse_in_q", [True, False])
+def test_the_learned_policy_counts_a_result_it_will_reuse_at_its_execution_seconds(
+    reuse_in_q: bool,
+) -> None:
+    """reuse_in_q: once the motion is planned, the same motion from the other IK result will be
+    reused, so it costs only its 4 s of execution there; off, it still costs a query's seconds
+    (Eq. 1, a little lower now that the same query succeeded once)."""
+    search, _ = make(learned=True, config=LearnedConfig(reuse_in_q=reuse_in_q))
     policy = search.policy
     assert isinstance(policy, LearnedPolicy)
     top = search._open_plan(0)
@@ -162,4 +174,7 @@ def test_the_learned_policy_counts_a_result_it_will_reuse_at_its_execution_secon
     assert guessed == pytest.approx(5.0 + 3.0 + 0.1 / 0.9 * 3.0)  # Eq. 1 for the motion
     search._query(first)  # the motion is planned once: 4 s of execution
     policy.pick_plan(search.tree)
-    assert policy.q(search.tree, second) == pytest.approx(4.0)  # no planning left, its 4 s
+    if reuse_in_q:
+        assert policy.q(search.tree, second) == pytest.approx(4.0)  # no planning left, its 4 s
+    else:
+        assert 4.0 + 3.0 < policy.q(search.tree, second) < guessed  # planning still counts
