@@ -284,7 +284,10 @@ def table_markdown(summary: dict[str, Any]) -> str:
 
 
 def _ci(e: Mapping[str, Any]) -> str:
-    return f"{_change(e['mean'])} ({_fmt(e['low'], True)} to {_fmt(e['high'], True)})"
+    """A paired change and its interval in the same words: "5.7% more (9.3% more to 2.0% more)"."""
+    if e["mean"] is None or math.isnan(e["mean"]):
+        return "-"  # no seed both solved (execution)
+    return f"{_change(e['mean'])} ({_change(e['low'])} to {_change(e['high'])})"
 
 
 def _ablation_markdown(

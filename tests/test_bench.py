@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -23,7 +24,7 @@ from planner.cli import main
 from planner.domains import load_domain
 from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
-from planner.report import failure_kind, query_summary, render_html, summarize
+from planner.report import failure_kind, query_summary, render_html, summarize, table_markdown
 from planner.store import QueryOutcome, RunStore
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
@@ -270,3 +271,30 @@ def test_failures_count_together_by_kind_most_first() -> None:
         "error: RuntimeError",
         "no reason given",
     ]
+
+
+def test_a_benchmark_of_variants_reports_each_against_learned(tmp_path: Path) -> None:
+    """An ablation (tamp bench --planners baseline,learned,learned:PART=off): the report pairs
+    every planner with learned as well as with the reference, intervals in the same words."""
+    planners = ["baseline", "learned", "learned:dead_ends=off"]
+    # A few seconds each: the report's form is the point, not who wins (an unsolved trial
+    # counts at the budget).
+    config = make_config(LINE, planners, trials=2, seed_start=0, budget_s=3.0)
+    db = tmp_path / "abl.db"
+    bench_id, done = run_bench(db, config, workers=2)
+    assert len(done) == 6
+    summary = summarize(db, bench_id)
+    against = summary["paired_against"]["learned"]
+    assert set(against) == {"baseline", "learned:dead_ends=off"}
+    assert against["baseline"]["total_censored"]["n"] == 2
+    table = table_markdown(summary)
+    assert "| planner | solved | total vs learned |" in table
+    ablation = table[table.index("| planner | solved | total vs learned |") :]
+    row = next(line for line in ablation.splitlines() if line.startswith("| learned:dead_ends"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    change = r"\d+\.\d% (less|more) \(\d+\.\d% (less|more) to \d+\.\d% (less|more)\)"
+    # total and planning against learned, total against the baseline: a change and its
+    # interval in the same words; execution too once a seed is solved by both, else "-".
+    for cell in (cells[2], cells[3], cells[5]):
+        assert re.fullmatch(change, cell), cell
+    assert cells[4] == "-" or re.fullmatch(change, cells[4]), cells[4]
