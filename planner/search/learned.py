@@ -136,62 +136,101 @@ class LearnedConfig:
     """Clamp P_S to [0.02, 0.98] in Eq. 1 and in the attempts' posterior (off: only a floor of
     1e-6, Eq. 1 divides by P_S). A model's near-zero P_S otherwise makes one stream's Eq. 1
     dwarf every other term of its plan, and a near-one P_S never doubts a binding that keeps
-    failing."""
+    failing.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): no measurable effect: planning 14%
+    more (16% less to 50% more) on tabletop-4, 2% less (18% less to 13% more) on kitchen-4."""
 
     bound_execution: bool = True
     """Q counts the execution seconds of the trajectories already bound on the node's path
     (planning time spent is sunk, but the robot has yet to run them), so of two siblings the
-    one with the shorter trajectory is cheaper. Off: Q is Eq. 4 over the streams left."""
+    one with the shorter trajectory is cheaper. Off: Q is Eq. 4 over the streams left.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): no measurable effect: planning 10%
+    more (14% less to 40% more) on tabletop-4, 4% more (15% less to 26% more) on kitchen-4, where
+    the model order binds every motion last."""
 
     reuse_in_q: bool = True
     """A stream the search will answer with an identical earlier query's result
-    (planner/search/reuse.py) costs only that result's execution seconds in Eq. 4."""
+    (planner/search/reuse.py) costs only that result's execution seconds in Eq. 4.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): no measurable effect: planning 2% more
+    (22% less to 36% more) on tabletop-4, 13% more (12% less to 45% more) on kitchen-4."""
 
     dead_end_prior: bool = True
     """A prediction below the stream's usual success rate is read as a chance that the query
     is a dead end (the part of the failure beyond chance: a crowded region, a pose out of
     reach); Eq. 4 is then paid 1 / (chance the rest is feasible) times, and such a query is
-    taken for a dead end after fewer failures."""
+    taken for a dead end after fewer failures.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: planning 47% more
+    without it (8% to 109% more); kitchen-4 6% less (34% less to 26% more)."""
 
     attempt_posterior: bool = True
     """Once a node's next query has been made from it, its Eq. 1 reads the outcomes: a success
     makes P_S a Beta posterior around the prediction (weight 2); failures only make it likelier
     that the binding cannot succeed (prior 0.3 to 0.95), so insisting grows costlier with each
     failure (each also costs 0.05 s of search) until re-sampling an ancestor is cheaper. Off:
-    querying again costs the prediction's Eq. 1 however often it has failed."""
+    querying again costs the prediction's Eq. 1 however often it has failed.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on neither: planning 9% less
+    without it on tabletop-4 (34% less to 28% more), 20% less on kitchen-4 (40% less to 22%
+    more), where its plans execute 16% longer (1% to 31%)."""
 
     pooled_evidence: bool = True
     """The outcomes of a query are pooled over every node that makes the same query (same
     stream, inputs and relevant state), in Eq. 4's terms and in the dead ends; off: a node
-    learns only from its own attempts. Needs attempt_posterior (or dead_ends) to matter."""
+    learns only from its own attempts. Needs attempt_posterior (or dead_ends) to matter.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on neither: planning 4% more
+    without it on tabletop-4 (20% less to 41% more), 5% less on kitchen-4 (27% less to 33% more),
+    where its plans execute 17% longer (3% to 30%)."""
 
     dead_ends: bool = True
     """A node whose next query failed (or led only to dead ends) more often than its
     prediction explains is a dead end: it and its ancestors up to the one that bound something
     the failures depend on are priced as if every continuation fails (backjumping), and a dead
-    end counts as a failed attempt of its parent's query."""
+    end counts as a failed attempt of its parent's query.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: without it
+    planning 335% more (194% to 522% more) with 5 timeouts in 40; on kitchen-4 85% more (11% less
+    to 231% more) with 1 timeout in 10."""
 
     shared_culprits: bool = True
     """A query that keeps failing while a later choice it depends on varies is blamed on the
     earlier choices every failure shared (needs dead_ends): otherwise each failure has its own
     identity and nothing pools them, and the search re-samples the choice nearest the
-    failure for ever."""
+    failure for ever.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): costs on tabletop-4: planning 39% less
+    without it (22% to 49% less); kitchen-4 85% more without it (10% less to 236% more), with 1
+    timeout in 10 that every other variant solves."""
 
     calibration: bool = True
     """Querying a node again is shifted by how much worse (or better) its children came out
     than the model guessed for a child before seeing one: a stream predicted with an input
     masked is an average over what that input could be, and without this a node whose
     children all came out worse than that average keeps looking cheaper than every one of
-    them."""
+    them.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on neither: planning 12% less
+    without it on tabletop-4 (31% less to 17% more), 6% less on kitchen-4 (30% less to 31% more)."""
 
     subtree_min: bool = True
     """A node is estimated by the lowest Q in its subtree, dead ends left out (progress along
-    a plan counts); off: by its own Q."""
+    a plan counts); off: by its own Q.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: planning 62% more
+    without it (15% to 142% more); kitchen-4 20% less (45% less to 20% more)."""
 
     model_order: bool = True
     """Each stream plan is reordered before the search by the model's predictions: cheap tests
     likely to fail first, never before the streams whose outputs they read
-    (planner/search/order.py); off: the plan's own order (``--order`` overrides either way)."""
+    (planner/search/order.py); off: the plan's own order (``--order`` overrides either way).
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): no measurable effect: planning 3% more
+    without it on tabletop-4 (27% less to 53% more), 50% more on kitchen-4 (22% less to 169%
+    more)."""
 
     @classmethod
     def paper(cls) -> LearnedConfig:
