@@ -26,6 +26,7 @@ from app.schemas import (
     DomainOut,
     EventPage,
     Health,
+    Picked,
     PlannerName,
     Report,
     Run,
@@ -35,6 +36,7 @@ from app.schemas import (
     SceneOut,
     StatusName,
     ViewerRequest,
+    ViewerShown,
     ViewerState,
 )
 from app.services import Dashboard
@@ -182,11 +184,29 @@ def cancel_run(run_id: RunId, request: Request) -> Run:
 def follow(body: ViewerRequest, request: Request) -> ViewerState:
     dash = _dash(request)
     try:
-        dash.viewer.follow(body.run_id, body.step)
+        dash.viewer.follow(body.run_id, body.step, body.node)
     except KeyError as exc:
         raise _unknown_run(body.run_id) from exc
     url = dash.viewer_url(request.headers.get("host"))
-    return ViewerState(url=url, run_id=body.run_id, step=body.step)
+    return ViewerState(url=url, run_id=body.run_id, step=body.step, node=body.node)
+
+
+@router.get("/viewer")
+def shown(request: Request) -> ViewerShown:
+    """What the 3D view shows, and the node of the ghost last clicked there (the page polls
+    it to select that node)."""
+    dash = _dash(request)
+    run_id, step, node = dash.viewer.shown or (None, None, None)
+    picked = dash.viewer.picked()
+    return ViewerShown(
+        url=dash.viewer_url(request.headers.get("host")),
+        run_id=run_id,
+        step=step,
+        node=node,
+        picked=None
+        if picked is None
+        else Picked(node_id=picked.node_id, label=picked.label, count=picked.count),
+    )
 
 
 @router.websocket("/runs/{run_id}/stream")
