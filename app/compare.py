@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from planner.report import query_summary, run_time_split
-from planner.store import LIVE_STATUSES, RunRecord, RunStore
+from planner.store import LIVE_STATUSES, QueryOutcome, RunRecord, RunStore
 
 TREE_TYPES = (
     "abstract_plans_found",
@@ -57,6 +57,7 @@ class Tree:
     solution: int | None
     plan_list: list[dict[str, Any]]  # abstract_plans_found's plans
     query_t: list[float]  # t of each query a sampler answered (reused ones left out)
+    plans_t: float = 0.0  # t of abstract_plans_found: the top-k planner's seconds
 
     @property
     def size(self) -> int:
@@ -78,6 +79,7 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
     solution: int | None = None
     plan_list: list[dict[str, Any]] = []
     query_t: list[float] = []
+    plans_t: float | None = None
     root, root_label = 0, "root"  # the search does not announce its root; a test may
     for e in events:
         kind = e["type"]
@@ -99,8 +101,9 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
                 query_t.append(float(e["t"]))
         elif kind == "solution_found":
             solution = int(e["node_id"])
-        elif kind == "abstract_plans_found" and not plan_list:
+        elif kind == "abstract_plans_found" and plans_t is None:
             plan_list = list(e.get("plans", []))
+            plans_t = float(e["t"])
     ids.insert(0, root)  # the root first: node i > 0 is the i-th node made
     return Tree(
         run_id=run_id,
@@ -116,6 +119,7 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
         solution=solution,
         plan_list=plan_list,
         query_t=query_t,
+        plans_t=plans_t or 0.0,
     )
 
 
@@ -300,11 +304,10 @@ def q_scale(trees: Sequence[Tree]) -> tuple[float, float] | None:
     return float(lo), float(hi)
 
 
-def time_split(store: RunStore, record: RunRecord, tree: Tree) -> dict[str, Any]:
+def time_split(record: RunRecord, tree: Tree, outcomes: Sequence[QueryOutcome]) -> dict[str, Any]:
     """:func:`planner.report.run_time_split` of one run, with its execution seconds; a run
     still going counts its planning seconds so far."""
-    outcomes = store.query_outcomes([record.id])
-    plans_at = store.event_times([record.id], "abstract_plans_found").get(record.id, 0.0)
+    plans_at = tree.plans_t  # what store.event_times(..., "abstract_plans_found") reads
     planning = record.planning_s
     if planning is None:
         planning = max([plans_at, *tree.query_t[-1:]])
@@ -314,11 +317,6 @@ def time_split(store: RunStore, record: RunRecord, tree: Tree) -> dict[str, Any]
         "execution_s": record.execution_s,
         "so_far": record.status in LIVE_STATUSES,
     }
-
-
-def queries(store: RunStore, run_id: str) -> dict[str, Any]:
-    """The run's queries per stream: how many, how many failed and why (``tamp report``'s)."""
-    return query_summary(store.query_outcomes([run_id]))
 
 
 def notes(a: RunRecord, b: RunRecord) -> list[str]:
@@ -354,11 +352,13 @@ def compare_runs(store: RunStore, trees: Trees, a_id: str, b_id: str) -> dict[st
     tree_a, tree_b = trees.get(a_id), trees.get(b_id)
 
     def side(record: RunRecord, tree: Tree) -> dict[str, Any]:
+        outcomes = store.query_outcomes([record.id])
         return {
             "run": record,
             "nodes": tree.size,
-            "split": time_split(store, record, tree),
-            "queries": queries(store, record.id),
+            "split": time_split(record, tree, outcomes),
+            # the run's queries per stream: how many failed and why (tamp report's)
+            "queries": query_summary(outcomes),
             "curve": curve(tree),
         }
 
