@@ -37,6 +37,7 @@ TREE_TYPES = (
 )
 MAX_CURVE_POINTS = 1000  # points of a run's queries-against-seconds curve
 KEPT_TREES = 8  # finished runs' trees kept in memory
+KEPT_COMPARISONS = 8  # comparisons of two finished runs kept in memory
 Q_PERCENTILES = (2.0, 98.0)  # the shared colour scale spans these percentiles of Q
 
 
@@ -124,13 +125,31 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
 
 
 class Trees:
-    """Trees of runs, the finished ones kept (a live run's tree is read every time)."""
+    """Trees of runs, the finished ones kept (a live run's tree is read every time). The
+    compare view asks for the same two trees three times at once (``/api/compare`` and each
+    ``/api/runs/{id}/tree``): concurrent misses of one tree wait for the first one's read."""
 
     def __init__(self, store: RunStore, keep: int = KEPT_TREES) -> None:
         self.store = store
         self.keep = keep
         self._lock = threading.Lock()
         self._kept: OrderedDict[tuple[str, int], Tree] = OrderedDict()
+        self._reading: dict[tuple[str, int], threading.Lock] = {}
+        self._compared: OrderedDict[tuple[Any, ...], dict[str, Any]] = OrderedDict()
+
+    def compared(self, key: tuple[Any, ...]) -> dict[str, Any] | None:
+        """A comparison kept under ``key`` (two finished runs and their last seqs)."""
+        with self._lock:
+            kept = self._compared.get(key)
+            if kept is not None:
+                self._compared.move_to_end(key)
+            return kept
+
+    def keep_compared(self, key: tuple[Any, ...], data: dict[str, Any]) -> None:
+        with self._lock:
+            self._compared[key] = data
+            while len(self._compared) > KEPT_COMPARISONS:
+                self._compared.popitem(last=False)
 
     def get(self, run_id: str) -> Tree:
         record = self.store.get_run(run_id)  # KeyError for an unknown run
@@ -142,11 +161,21 @@ class Trees:
             if kept is not None:
                 self._kept.move_to_end(key)
                 return kept
-        tree = read_tree(self.store, run_id)
-        with self._lock:
-            self._kept[key] = tree
-            while len(self._kept) > self.keep:
-                self._kept.popitem(last=False)
+            reading = self._reading.setdefault(key, threading.Lock())
+        with reading:  # the first reads; the others wait and find it kept
+            with self._lock:
+                kept = self._kept.get(key)
+            if kept is not None:
+                return kept
+            try:
+                tree = read_tree(self.store, run_id)
+                with self._lock:
+                    self._kept[key] = tree
+                    while len(self._kept) > self.keep:
+                        self._kept.popitem(last=False)
+            finally:
+                with self._lock:
+                    self._reading.pop(key, None)
         return tree
 
 
@@ -349,6 +378,10 @@ def compare_runs(store: RunStore, trees: Trees, a_id: str, b_id: str) -> dict[st
         except KeyError as exc:
             raise KeyError(f"unknown run {run_id!r}") from exc
     a, b = records[a_id], records[b_id]
+    finished = a.status not in LIVE_STATUSES and b.status not in LIVE_STATUSES
+    key = (a_id, store.last_seq(a_id), b_id, store.last_seq(b_id))
+    if finished and (kept := trees.compared(key)) is not None:
+        return kept  # two finished runs do not change (the page asks again on every visit)
     tree_a, tree_b = trees.get(a_id), trees.get(b_id)
 
     def side(record: RunRecord, tree: Tree) -> dict[str, Any]:
@@ -363,7 +396,7 @@ def compare_runs(store: RunStore, trees: Trees, a_id: str, b_id: str) -> dict[st
         }
 
     name_a, name_b = f"A ({a.planner})", f"B ({b.planner})"
-    return {
+    data = {
         "a": side(a, tree_a),
         "b": side(b, tree_b),
         "same_scene": a.scene == b.scene and a.config.get("domain") == b.config.get("domain"),
@@ -371,3 +404,6 @@ def compare_runs(store: RunStore, trees: Trees, a_id: str, b_id: str) -> dict[st
         "divergence": divergence(tree_a, tree_b, name_a, name_b),
         "q_scale": q_scale([tree_a, tree_b]),
     }
+    if finished:
+        trees.keep_compared(key, data)
+    return data

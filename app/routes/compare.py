@@ -47,6 +47,5 @@ def compare(a: RunQuery, b: RunQuery, dash: Dash) -> CompareOut:
         data = compare_runs(dash.store, dash.trees, a, b)
     except KeyError as exc:
         raise not_found(str(exc.args[0])) from exc
-    for side in ("a", "b"):
-        data[side]["run"] = Run.of(data[side]["run"])
-    return CompareOut.model_validate(data)
+    sides = {side: {**data[side], "run": Run.of(data[side]["run"])} for side in ("a", "b")}
+    return CompareOut.model_validate({**data, **sides})  # data may be kept: not changed
