@@ -45,7 +45,9 @@ export class ModelsPage {
       e.preventDefault();
       this._train();
     });
-    this.el.bench.addEventListener("change", () => this._syncRuns());
+    this.el.bench.addEventListener("change", () =>
+      this._syncRuns().catch((err) => this._error(`Cannot read the benchmark's runs: ${err.message}`)),
+    );
     this.el.list.addEventListener("click", (e) => {
       const row = e.target.closest("[data-model]");
       if (row) location.hash = `#model=${encodeURIComponent(row.dataset.model)}`;
