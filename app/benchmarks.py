@@ -20,7 +20,7 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import datetime
 from multiprocessing.connection import Connection
 from multiprocessing.process import BaseProcess
@@ -190,11 +190,18 @@ class BenchService:
 
     def _with(self, record: BenchRecord, counts: dict[str, dict[str, int]]) -> BenchInfo:
         with self._lock:
-            mine = record.id in self._workers
+            worker = self._workers.get(record.id)
             message = self._messages.get(record.id, "")
         runner = None
-        if mine:
+        if worker is not None:
             runner = "dashboard"
+            # A worker told to stop leaves its benchmark "interrupted" in the store as it
+            # exits; it is "running" (stopping) until the server has reaped it and said how
+            # it ended ("cancelled" for a cancel), never "interrupted" for a moment first.
+            if worker.stop_at is not None:
+                record = replace(record, status="running")
+                if worker.cancel_at is not None:
+                    message = "cancelling: the running trials are being stopped"
         elif record.status == "running" and is_alive(record.owner):
             runner = "elsewhere"
         return _info(record, counts, runner, message)
