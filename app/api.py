@@ -17,15 +17,16 @@ from fastapi import (
 )
 from fastapi.concurrency import run_in_threadpool
 
+from app.deps import COMMON_RESPONSES, ERROR, RunId, bad_field, get_dashboard, not_found
+from app.errors import RequestError
 from app.hub import Ended, Lagged
 from app.manager import QueueFullError, RunNotLiveError
 from app.schemas import (
     MAX_SEQ,
     DomainOut,
-    ErrorOut,
     EventPage,
     Health,
-    ModelOut,
+    Picked,
     PlannerName,
     Report,
     Run,
@@ -34,45 +35,27 @@ from app.schemas import (
     RunRequest,
     SceneOut,
     StatusName,
-    ValidationErrorOut,
     ViewerRequest,
+    ViewerShown,
     ViewerState,
 )
-from app.services import Dashboard, RequestError
+from app.services import Dashboard
 from planner.events import event_to_json
 from planner.store import LIVE_STATUSES
 
 log = logging.getLogger(__name__)
 
-ERROR = {"model": ErrorOut}
-router = APIRouter(
-    prefix="/api",
-    responses={
-        400: {**ERROR, "description": "the Host header names another server"},
-        401: {**ERROR, "description": "the server's token (TAMP_TOKEN) is missing or wrong"},
-        403: {**ERROR, "description": "a browser page of another origin"},
-        413: {**ERROR, "description": "the request body is larger than the server takes"},
-        422: {"model": ValidationErrorOut, "description": "a bad field, named"},
-    },
-)
+router = APIRouter(prefix="/api", responses=COMMON_RESPONSES)
 
-RunId = Annotated[str, Path(min_length=1, max_length=64, description="a run id")]
 WS_PAGE = 1000  # stored events read per page when a websocket catches up
 
 
 def _dash(request: Request) -> Dashboard:
-    dash: Dashboard = request.app.state.dashboard
-    return dash
+    return get_dashboard(request)
 
 
 def _unknown_run(run_id: str) -> HTTPException:
-    return HTTPException(404, detail=f"unknown run {run_id!r}")
-
-
-def _bad(field: str, message: str, where: str = "body") -> HTTPException:
-    return HTTPException(
-        422, detail=[{"loc": [where, field], "msg": message, "type": "value_error"}]
-    )
+    return not_found(f"unknown run {run_id!r}")
 
 
 @router.get("/health")
@@ -117,11 +100,6 @@ def domains(request: Request) -> list[DomainOut]:
     ]
 
 
-@router.get("/models")
-def models(request: Request) -> list[ModelOut]:
-    return [ModelOut(**vars(m)) for m in _dash(request).models.list()]
-
-
 @router.get("/reports")
 def reports(request: Request) -> list[Report]:
     return [Report(**r) for r in _dash(request).reports()]
@@ -133,7 +111,7 @@ def launch(body: RunRequest, request: Request) -> Run:
     try:
         record = dash.launch(body.scene, body.planner, body.seed, body.budget_s, body.model, body.k)
     except RequestError as exc:
-        raise _bad(exc.field, str(exc)) from exc
+        raise bad_field(exc.field, str(exc)) from exc
     except QueueFullError as exc:
         raise HTTPException(429, detail=str(exc)) from exc
     return Run.of(record)
@@ -206,11 +184,29 @@ def cancel_run(run_id: RunId, request: Request) -> Run:
 def follow(body: ViewerRequest, request: Request) -> ViewerState:
     dash = _dash(request)
     try:
-        dash.viewer.follow(body.run_id, body.step)
+        dash.viewer.follow(body.run_id, body.step, body.node)
     except KeyError as exc:
         raise _unknown_run(body.run_id) from exc
     url = dash.viewer_url(request.headers.get("host"))
-    return ViewerState(url=url, run_id=body.run_id, step=body.step)
+    return ViewerState(url=url, run_id=body.run_id, step=body.step, node=body.node)
+
+
+@router.get("/viewer")
+def shown(request: Request) -> ViewerShown:
+    """What the 3D view shows, and the node of the ghost last clicked there (the page polls
+    it to select that node)."""
+    dash = _dash(request)
+    run_id, step, node = dash.viewer.shown or (None, None, None)
+    picked = dash.viewer.picked()
+    return ViewerShown(
+        url=dash.viewer_url(request.headers.get("host")),
+        run_id=run_id,
+        step=step,
+        node=node,
+        picked=None
+        if picked is None
+        else Picked(node_id=picked.node_id, label=picked.label, count=picked.count),
+    )
 
 
 @router.websocket("/runs/{run_id}/stream")

@@ -55,6 +55,12 @@ class ModelInfo:
     default: bool  # the shipped model of its domain
     streams: list[str]
     bytes: int
+    trained_at: str | None = None  # when it was trained (ISO 8601), if the file says
+    runs: int | None = None  # runs it was trained and validated on
+    queries: int | None = None  # stream queries it saw
+    validated: bool = False  # the file holds its validation figures
+    source: str = "file"  # "shipped" (a domain's), "dashboard" (trained here), "file"
+    metadata: dict[str, Any] | None = None  # everything the file says about its training
 
 
 def safe_name(name: str) -> bool:
@@ -179,6 +185,22 @@ class Models:
             return files[name]
         raise UnknownNameError(f"unknown model {name!r} (known: {', '.join(files) or 'none'})")
 
+    def info(self, name: str) -> ModelInfo:
+        """Model ``name`` with what its file says; :class:`UnknownNameError` lists the known
+        names."""
+        for info in self.list():
+            if info.name == name:
+                return info
+        known = ", ".join(m.name for m in self.list()) or "none"
+        raise UnknownNameError(f"unknown model {name!r} (known: {known})")
+
+    def domain_of(self, name: str) -> str:
+        return self.info(name).domain
+
+    def exists(self, name: str) -> bool:
+        """Whether a model file of this name is offered, or would be shadowed by one."""
+        return name in self.files() or (self.directory / f"{name}.pt").exists()
+
     def default_for(self, domain: str) -> str | None:
         """The name of a domain's shipped model, if it has one."""
         return domain if domain in self.domains.shipped_models() else None
@@ -195,13 +217,32 @@ class Models:
 
         try:
             data: Any = torch.load(path, map_location="cpu", weights_only=True)
+            meta = data.get("metadata") or {}
+            provenance = meta.get("provenance")
+            source = "shipped" if default else "file"
+            if isinstance(provenance, dict) and provenance.get("trained_by") == "dashboard":
+                source = "dashboard"
             return ModelInfo(
                 name=name,
                 domain=str(data["domain"]),
                 default=default,
                 streams=sorted(data["networks"]),
                 bytes=path.stat().st_size,
+                trained_at=_text(meta.get("trained_at")),
+                runs=_count(meta.get("runs")),
+                queries=_count(meta.get("queries")),
+                validated=isinstance(meta.get("validation"), dict),
+                source=source,
+                metadata=meta if isinstance(meta, dict) else None,
             )
         except Exception as exc:  # a broken file is not offered, and says why in the log
             log.warning("model file %s is not offered: %s", path, exc)
             return None
+
+
+def _text(value: Any) -> str | None:
+    return value if isinstance(value, str) else None
+
+
+def _count(value: Any) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None

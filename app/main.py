@@ -20,6 +20,7 @@ from starlette.routing import Match, Route
 from app import catalog
 from app.api import router
 from app.pagecache import ReadCache
+from app.routes import benchmarks, compare, models
 from app.security import Access, Guard, Refusal, refusal_response
 from app.services import Dashboard
 from app.settings import WILDCARD_HOSTS, Settings
@@ -150,6 +151,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             await websocket.close(code=1008, reason=detail[:120])
 
     app.include_router(router)
+    for resource in (compare, benchmarks, models):
+        app.include_router(resource.router)
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
 
     @app.get("/", include_in_schema=False)

@@ -143,6 +143,11 @@ class ModelOut(BaseModel):
     default: bool
     streams: list[str]
     bytes: int
+    trained_at: str | None
+    runs: int | None
+    queries: int | None
+    validated: bool = Field(description="the file holds its validation figures")
+    source: Literal["shipped", "dashboard", "file"]
 
 
 class Health(BaseModel):
@@ -160,12 +165,30 @@ class ViewerRequest(BaseModel):
     step: Annotated[int, Field(ge=0, le=MAX_SEQ), BeforeValidator(_integral)] | None = Field(
         None, description="show events 0..step; null: all, live"
     )
+    node: Annotated[int, Field(ge=0, le=MAX_SEQ), BeforeValidator(_integral)] | None = Field(
+        None, description="the search node to show: the bodies where it puts them, its samples"
+    )
 
 
 class ViewerState(BaseModel):
     url: str | None
     run_id: str
     step: int | None
+    node: int | None = None
+
+
+class Picked(BaseModel):
+    node_id: int
+    label: str
+    count: int = Field(description="how many ghosts have been clicked so far (changes with each)")
+
+
+class ViewerShown(BaseModel):
+    url: str | None
+    run_id: str | None
+    step: int | None
+    node: int | None
+    picked: Picked | None = Field(description="the search node of the ghost last clicked")
 
 
 class Report(BaseModel):
@@ -191,3 +214,220 @@ class ValidationErrorOut(BaseModel):
     """A 422: one entry per bad field (the first 20)."""
 
     detail: list[FieldError]
+
+
+# --- comparing two runs ------------------------------------------------------------------------
+
+
+class TreeOut(BaseModel):
+    """A run's search tree in columns, the nodes in the order they were made (the root
+    first): node ``i`` is ``ids[i]``, its parent ``parents[i]`` and so on."""
+
+    run_id: str
+    ids: list[int]
+    parents: list[int | None]
+    plans: list[int] = Field(description="the stream plan of each node (-1: the root)")
+    depths: list[int]
+    streams: list[int] = Field(description="index into stream_names; -1: root or stream plan")
+    stream_names: list[str]
+    success: list[bool]
+    q: list[float | None] = Field(description="the node's latest predicted Q (learned planners)")
+    labels: list[str]
+    solution: int | None = Field(description="the node that binds the whole plan, if found")
+    plan_list: list[dict[str, Any]] = Field(description="the abstract plans (index, actions ...)")
+
+
+class NodeRef(BaseModel):
+    node_id: int
+    parent_id: int | None
+    plan_index: int
+    depth: int
+    stream: str | None
+    success: bool
+    label: str
+
+
+class OutcomeDifference(BaseModel):
+    index: int = Field(description="how many nodes both made before this one")
+    a: NodeRef
+    b: NodeRef
+    text: str
+
+
+class Divergence(BaseModel):
+    """The first node the two searches made by different choices (app/compare.py)."""
+
+    kind: Literal["choice", "prefix", "identical", "no tree"]
+    same: int = Field(description="nodes both searches made alike before they parted")
+    text: str
+    a: NodeRef | None
+    b: NodeRef | None
+    outcome: OutcomeDifference | None = Field(
+        description="the first query both made alike that ended otherwise (success, failure)"
+    )
+
+
+class TimeSplitOut(BaseModel):
+    """Where a run's planning seconds went (planner.report.run_time_split), and execution."""
+
+    planning_s: float
+    until_plans_s: float = Field(description="until the abstract plans were found (top-k)")
+    queries_s: float
+    queries_by_stream_s: dict[str, float]
+    search_s: float = Field(description="the rest: the search's own seconds")
+    execution_s: float | None
+    so_far: bool = Field(description="the run is still going")
+
+
+class FailureKind(BaseModel):
+    kind: str
+    count: int
+    seconds: float
+
+
+class StreamQueries(BaseModel):
+    queries: int
+    failed: int
+    failed_s: float
+    kinds: list[FailureKind]
+
+
+class Curve(BaseModel):
+    t: list[float] = Field(description="seconds since the run started")
+    queries: list[float] = Field(description="stream queries made by then")
+
+
+class CompareSide(BaseModel):
+    run: Run
+    nodes: int
+    split: TimeSplitOut
+    queries: dict[str, StreamQueries]
+    curve: Curve
+
+
+class CompareOut(BaseModel):
+    a: CompareSide
+    b: CompareSide
+    same_scene: bool
+    notes: list[str] = Field(description="what to know before comparing (other scene or seed)")
+    divergence: Divergence
+    q_scale: tuple[float, float] | None = Field(
+        description="one colour scale of Q for both trees (2nd to 98th percentile)"
+    )
+
+
+# --- benchmarks --------------------------------------------------------------------------------
+
+PlannerSpecName = Annotated[
+    str,
+    Field(
+        pattern=r"^[a-z]+(:[a-z_]+=[A-Za-z0-9_.+-]+)*$",
+        max_length=200,
+        description="a planner (baseline, paper, learned, sequential) or a variant such as "
+        "learned:shared_culprits=off",
+        examples=["baseline", "learned:calibration=off"],
+    ),
+]
+
+
+class BenchRequest(BaseModel):
+    model_config = ConfigDict(
+        **REQUEST,
+        json_schema_extra={
+            "examples": [{"scene": "line-2", "planners": ["baseline", "learned"], "trials": 2}]
+        },
+    )
+
+    scene: SceneName
+    planners: list[PlannerSpecName] = Field(
+        ["baseline", "learned"],
+        min_length=1,
+        max_length=8,
+        description="the first is the reference",
+    )
+    trials: Integer = Field(4, ge=1, le=10_000, description="seeds, each run by every planner")
+    seed_start: Integer = Field(1000, ge=0, le=2**31 - 1)
+    budget_s: float = Field(60.0, gt=0, le=3600, description="seconds per trial")
+    model: ModelName | None = Field(None, description="the learned planners' model by name")
+    workers: Integer = Field(2, ge=1, le=16, description="trials at once")
+    order: Literal["auto", "plan", "model"] = "auto"
+
+
+class ResumeRequest(BaseModel):
+    model_config = REQUEST
+
+    workers: Integer = Field(2, ge=1, le=16, description="trials at once")
+
+
+class PlannerProgressOut(BaseModel):
+    done: int
+    solved: int
+
+
+class BenchOut(BaseModel):
+    id: str
+    scene: str
+    planners: list[str]
+    seeds: int
+    seed_first: int
+    seed_last: int
+    budget_s: float
+    model: str | None
+    order: str
+    status: str = Field(description="running, done, interrupted or cancelled (both resumable)")
+    created_at: datetime
+    finished_at: datetime | None
+    done: int = Field(description="trials finished")
+    total: int = Field(description="trials in all: seeds x planners")
+    progress: dict[str, PlannerProgressOut]
+    runner: Literal["dashboard", "elsewhere"] | None = Field(
+        description="who runs it: this dashboard, or another process (tamp bench)"
+    )
+    message: str
+
+
+class BenchDetail(BenchOut):
+    summary: dict[str, Any] = Field(description="planner.report.summarize: what tamp report shows")
+
+
+# --- models and training -----------------------------------------------------------------------
+
+
+class ModelDetail(ModelOut):
+    metadata: dict[str, Any] = Field(description="what the file says about its training")
+
+
+RunIdText = Annotated[str, Field(min_length=1, max_length=64)]
+
+
+class TrainRequest(BaseModel):
+    model_config = ConfigDict(
+        **REQUEST,
+        json_schema_extra={"examples": [{"name": "mine", "runs": ["<run id>", "<run id>"]}]},
+    )
+
+    name: ModelName = Field(description="the new model's name (not one offered already)")
+    runs: list[RunIdText] = Field(min_length=1, max_length=10_000)
+    seed: Integer = Field(0, ge=0, le=2**31 - 1)
+    epochs: Integer = Field(300, ge=1, le=5000)
+    benchmark: str | None = Field(
+        None, min_length=1, max_length=64, description="the benchmark the runs are from"
+    )
+
+
+class TrainJobOut(BaseModel):
+    id: str
+    name: str
+    domain: str
+    runs: list[str]
+    queries: int
+    seed: int
+    epochs: int
+    status: Literal["running", "done", "failed"]
+    created_at: datetime
+    finished_at: datetime | None
+    progress: float
+    stream: str | None
+    message: str
+    report: dict[str, Any] | None
+    benchmark: str | None

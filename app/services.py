@@ -8,9 +8,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from app import catalog
+from app.benchmarks import BenchService
+from app.compare import Trees
+from app.errors import RequestError
 from app.hub import EventDict, EventHub
 from app.manager import RunManager
 from app.settings import Settings
+from app.training import TrainingService
 from app.viewing import Viewer, ViewerService
 from planner.events import event_to_dict
 from planner.planners import get_planner
@@ -21,15 +25,6 @@ if TYPE_CHECKING:
     from app.viewgate import ViewerGate
 
 log = logging.getLogger(__name__)
-
-
-class RequestError(ValueError):
-    """A request that names something that does not exist or does not fit; ``field`` says
-    which part of the body is wrong."""
-
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(message)
-        self.field = field
 
 
 class Dashboard:
@@ -59,8 +54,21 @@ class Dashboard:
         self.viewer = ViewerService(viewer, self.store, self.hub)
         self.viewer_gate = viewer_gate
         self.reports_dir = settings.reports_dir
+        self.trees = Trees(self.store)
+        self.benches = BenchService(
+            self.store,
+            settings.database_url,
+            self.domains,
+            self.models,
+            max_running=settings.max_benchmarks,
+        )
+        self.training = TrainingService(
+            self.store, settings.database_url, self.domains, self.models
+        )
 
     def close(self) -> None:
+        self.benches.close()
+        self.training.close()
         self.manager.close()
         if self.viewer_gate is not None:
             self.viewer_gate.close()

@@ -50,6 +50,7 @@ class Settings(BaseSettings):
     viewer_port: int = Field(8080, ge=0, le=65535)
     max_running: int = Field(1, ge=1, le=64)  # runs planning at once, each in its own process
     max_queued: int = Field(20, ge=0, le=10_000)  # runs waiting for a slot; more is a 429
+    max_benchmarks: int = Field(1, ge=1, le=16)  # benchmarks run from the page at once
     cancel_grace_s: float = Field(10.0, gt=0)  # a cancelled run that has not stopped is killed
     ws_queue_events: int = Field(5000, ge=10)  # a websocket client this far behind resyncs
     # Binding beyond loopback needs a token, or this to say anyone who reaches it may use it.

@@ -16,7 +16,10 @@ view for this domain":
 - the tree's shape as a node-link drawing on a panel beyond the scene, the solution's branch in
   blue;
 - once the events hold ``solution_found`` and the run's plan file is given, the hook's timeline
-  plays (Play/Pause and a time slider in the GUI).
+  plays (Play/Pause and a time slider in the GUI);
+- the node the page selected: its ghosts highlighted (its ancestors' too, in another colour),
+  labelled, and the bodies where the hook's ``focus`` puts them (the robot at the node's
+  configuration); a click on a ghost names its node (``picked``), which the page then selects.
 """
 
 from __future__ import annotations
@@ -47,6 +50,8 @@ from planner.view import (
     Body,
     BodyState,
     Box,
+    FocusView,
+    Marker,
     Mesh,
     Meshes,
     Rgb,
@@ -66,6 +71,9 @@ MAX_PATHS = 500  # paths drawn per layer (the latest)
 GHOST_OPACITY = 0.45  # translucent markers
 FAILED_RGB = (230, 20, 20)  # failed queries, in the scene and in the tree drawing
 SOLUTION_RGB = (40, 110, 230)  # the solution's branch in the tree drawing
+FOCUS_RGB = (225, 0, 190)  # the selected node's own ghosts
+BRANCH_RGB = (0, 190, 230)  # the ghosts of the selected node's ancestors
+LOOK_DISTANCE = 1.4  # metres from the selected node's ghost, "Look at the selected node"
 ROOT_RGB = (90, 90, 90)  # the tree's root
 PANEL_GAP = 1.0  # the tree drawing stands this far beyond the farthest body, metres
 PANEL_HEIGHT = 1.6  # its height, metres
@@ -85,6 +93,15 @@ class _Panel:
     width: float
     top: float
     height: float
+
+
+@dataclass(frozen=True)
+class Picked:
+    """The ghost last clicked in the 3D view: its node, and how many clicks there were."""
+
+    node_id: int
+    label: str
+    count: int
 
 
 class _BodyView:
@@ -224,8 +241,14 @@ class RunViewer:
                 "Time (s)", min=0.0, max=1.0, step=SLIDER_STEP, initial_value=0.0, disabled=True
             )
             self._plan_note = gui.add_markdown("No plan yet.")
+        with gui.add_folder("Selected node"):
+            self._selection = gui.add_markdown(
+                "Select a node in the page's tree, or click a ghost."
+            )
+            self._look = gui.add_checkbox("Look at the selected node", initial_value=False)
         self._play.on_click(self._on_play)
         self._time.on_update(self._on_seek)
+        self._look.on_update(lambda _: self._look_at_focus())
         self._key: tuple[str, int, str | None] | None = None  # (scene, seed, domain) built
         self._scene = ""
         self._note = ""  # why there is no 3D view of the scene shown, if there is none
@@ -245,6 +268,10 @@ class RunViewer:
         self._playing = False
         self._dirty = False
         self._drawn_at = 0.0
+        self._focus: int | None = None  # the node the page selected
+        self._focus_bodies: Mapping[str, BodyState] = {}  # where it puts the bodies
+        self._focus_at: Vec3 | None = None  # where its first ghost (or failure) is
+        self._picked: Picked | None = None
         self._closed = False
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._tick, name="run-viewer", daemon=True)
@@ -279,6 +306,8 @@ class RunViewer:
                 "predictions": len(fold.q),
                 "skipped": fold.skipped,
                 "hidden": total - drawn,
+                "focus": -1 if self._focus is None else self._focus,
+                "focus_bodies": len(self._focus_bodies),
                 **self._shown,
             }
 
@@ -295,6 +324,18 @@ class RunViewer:
             return None if self._anim is None else self._anim.duration
 
     @property
+    def picked(self) -> Picked | None:
+        """The node of the ghost last clicked, if any."""
+        with self._lock:
+            return self._picked
+
+    @property
+    def focus_bodies(self) -> dict[str, BodyState]:
+        """Where the selected node puts the bodies (empty without one, or a hook to say)."""
+        with self._lock:
+            return dict(self._focus_bodies)
+
+    @property
     def playhead(self) -> float:
         """Seconds into the plan the scene is shown at."""
         with self._lock:
@@ -308,14 +349,19 @@ class RunViewer:
         plan: Mapping[str, Any] | None,
         *,
         domain: str | None = None,
+        focus: int | None = None,
     ) -> None:
         """Reset the view to this run: build the scene (if it changed) and draw the state after
         exactly ``events`` (the page's current step). ``plan`` is the run's bound plan file dict
-        when solved (else None); ``domain`` the run's domain reference (its folder, or None)."""
+        when solved (else None); ``domain`` the run's domain reference (its folder, or None);
+        ``focus`` the search node the page selected (None: none)."""
         with self._lock:
             if self._closed:
                 return
             try:
+                if (scene, seed, domain) != self._key:
+                    self._picked = None
+                self._focus = focus
                 self._show(scene, seed, events, plan, domain)
             except Exception:
                 log.exception("viewer: could not show scene %r (seed %r)", scene, seed)
@@ -566,6 +612,8 @@ class RunViewer:
         }
         if self._anim is not None:
             states.update(self._anim.at(self._t))
+        if not self._playing:
+            states.update(self._focus_bodies)  # the selected node, until the plan plays
         with self._server.atomic():
             attached = []
             for name, state in states.items():
@@ -597,6 +645,7 @@ class RunViewer:
                     self._shown[layer] = self._draw_layer(fold, layer, ghosts)
                 self._shown["failed_marked"] = self._draw_failures(fold)
                 self._shown["tree_nodes"] = self._draw_tree(fold)
+                self._draw_focus(fold)
             self._set_status(self._status_text(fold))
             if fold.solution is not None and self._anim is None:
                 self._update_plan_gui()
@@ -610,7 +659,7 @@ class RunViewer:
         return ghosts[-(MAX_PATHS if kind == "path" else MAX_GHOSTS) :]
 
     def _draw_layer(self, fold: SearchFold, layer: str, all_ghosts: list[Ghost]) -> int:
-        """Draw the latest ghosts of one layer as one batch; returns how many."""
+        """Draw the latest ghosts of one layer as one batch, each clickable; returns how many."""
         name = f"/search/{layer}"
         kind = all_ghosts[0].marker.kind if all_ghosts else None
         ghosts = [g for g in self._drawn(all_ghosts) if g.marker.kind == kind]
@@ -618,8 +667,27 @@ class RunViewer:
             self._drop(name)
             return 0
         colors = fold.colors([g.node_id for g in ghosts])
-        scene = self._server.scene
         markers = [g.marker for g in ghosts]
+        opacity = GHOST_OPACITY if markers[0].translucent else None
+        handle = self._draw_markers(name, markers, colors, opacity)
+        if isinstance(handle, viser.BatchedMeshHandle):  # viser picks meshes, not lines
+            handle.on_click(lambda event: self._on_pick(event, ghosts))
+        return len(ghosts)
+
+    def _draw_markers(
+        self,
+        name: str,
+        markers: Sequence[Marker],
+        colors: npt.NDArray[np.uint8],
+        opacity: float | None,
+        *,
+        thickness: float = 0.012,
+        grow: float = 1.0,
+    ) -> viser.BatchedMeshHandle | viser.LineSegmentsHandle:
+        """Markers of one kind as one batch (line segments for paths), ``colors`` one row per
+        marker, ``grow`` scaling each; kept under ``name``."""
+        scene = self._server.scene
+        kind = markers[0].kind
         if kind == "path":
             segments: list[tuple[Vec3, Vec3]] = []
             seg_colors: list[npt.NDArray[np.uint8]] = []
@@ -632,19 +700,22 @@ class RunViewer:
                     seg_colors.append(color)
             points = np.array(segments, dtype=np.float32)
             seg_rgb = np.repeat(np.array(seg_colors, dtype=np.uint8)[:, None, :], 2, axis=1)
-            self._layers[name] = scene.add_line_segments(name, points, seg_rgb, thickness=0.012)
-            return len(ghosts)
+            lines = scene.add_line_segments(name, points, seg_rgb, thickness=thickness)
+            self._layers[name] = lines
+            return lines
         positions = np.array([m.position for m in markers], dtype=np.float32)
         wxyzs = np.array([to_wxyz(m.quat) for m in markers], dtype=np.float32)
         scales = None
         if kind == "box":
             vertices, faces = _UNIT_BOX
-            scales = np.array([m.size for m in markers], dtype=np.float32)
+            scales = np.array([m.size for m in markers], dtype=np.float32) * grow
         elif kind == "boxes":
             vertices, faces = _boxes(*markers[0].parts)
+            scales = np.full((len(markers), 3), grow, dtype=np.float32) if grow != 1.0 else None
         else:
             vertices, faces = _ARROW
-        self._layers[name] = scene.add_batched_meshes_simple(
+            scales = np.full((len(markers), 3), grow, dtype=np.float32) if grow != 1.0 else None
+        handle = scene.add_batched_meshes_simple(
             name,
             vertices,
             faces,
@@ -652,12 +723,126 @@ class RunViewer:
             positions,
             batched_scales=scales,
             batched_colors=colors,
-            opacity=GHOST_OPACITY if markers[0].translucent else None,
+            opacity=opacity,
             side="double",
             cast_shadow=False,
             receive_shadow=False,
         )
-        return len(ghosts)
+        self._layers[name] = handle
+        return handle
+
+    # --- the selected node ---------------------------------------------------------------------
+
+    def _draw_focus(self, fold: SearchFold) -> None:
+        """Highlight the selected node: its ghosts, its ancestors' (another colour), a label,
+        and the bodies where the domain's hook puts them."""
+        for name in [n for n in self._layers if n.startswith("/focus/")]:
+            self._drop(name)
+        node = self._focus
+        self._focus_bodies = {}
+        self._focus_at = None
+        if node is None or node not in fold.nodes:
+            self._shown["focus_markers"] = self._shown["branch_markers"] = 0
+            _set_markdown(self._selection, self._selection_text(fold))
+            self._pose_bodies()
+            return
+        hook = self._loaded.spec.view if self._loaded is not None else None
+        own = fold.markers_of(node)
+        branch = [m for n in fold.branch(node)[:-1] for m in fold.markers_of(n)]
+        if isinstance(hook, FocusView) and self._problem is not None:
+            try:
+                focus = hook.focus(fold.branch_queries(node), self._problem)
+                self._focus_bodies = dict(focus.bodies)
+                own += list(focus.markers)
+            except (KeyError, TypeError, ValueError) as exc:
+                log.warning("viewer: the domain cannot pose node %d: %s", node, exc)
+        self._shown["focus_markers"] = self._draw_group("/focus/own", own, FOCUS_RGB, 1.08)
+        self._shown["branch_markers"] = self._draw_group("/focus/branch", branch, BRANCH_RGB, 1.04)
+        failure = next((f for f in fold.failures if f.node_id == node), None)
+        where = own[0].position if own else (failure.where if failure else None)
+        if own and own[0].kind == "path":
+            where = own[0].points[len(own[0].points) // 2]
+        self._focus_at = where
+        if where is not None:
+            self._layers["/focus/label"] = self._server.scene.add_label(
+                "/focus/label",
+                f"#{node} {fold.labels.get(node, '')}",
+                position=(where[0], where[1], where[2] + 0.12),
+                anchor="bottom-center",
+                font_screen_scale=0.8,
+            )
+        _set_markdown(self._selection, self._selection_text(fold))
+        self._pose_bodies()
+        if self._look.value:
+            self._look_at_focus()
+
+    def _draw_group(self, name: str, markers: Sequence[Marker], rgb: Rgb, grow: float) -> int:
+        """Markers of any kinds, one batch per kind (and compound shape); returns how many."""
+        groups: dict[tuple[str, tuple[Any, ...]], list[Marker]] = {}
+        for m in markers:
+            groups.setdefault((m.kind, m.parts), []).append(m)
+        for i, group in enumerate(groups.values()):
+            colors = np.tile(np.array(rgb, dtype=np.uint8), (len(group), 1))
+            self._draw_markers(f"{name}{i}", group, colors, None, thickness=0.03, grow=grow)
+        return len(markers)
+
+    def _look_at_focus(self) -> None:
+        """Turn every client's camera to the selected node's ghost (when asked to)."""
+        with self._lock:
+            where = self._focus_at
+            if where is None or not self._look.value:
+                return
+            for client in self._server.get_clients().values():
+                camera = client.camera
+                direction = np.asarray(camera.position) - np.asarray(camera.look_at)
+                norm = float(np.linalg.norm(direction)) or 1.0
+                target = np.asarray(where, dtype=np.float64)
+                eye = target + direction / norm * LOOK_DISTANCE
+                camera.look_at = (float(target[0]), float(target[1]), float(target[2]))
+                camera.position = (float(eye[0]), float(eye[1]), float(eye[2]))
+
+    def _on_pick(self, event: Any, ghosts: Sequence[Ghost]) -> None:
+        """A click on a ghost of a layer: name its node (``event.instance_index``, else the
+        ghost nearest the click's ray)."""
+        with self._lock:
+            fold = self._fold
+            if fold is None or not ghosts:
+                return
+            index = getattr(event, "instance_index", None)
+            if not isinstance(index, int) or not 0 <= index < len(ghosts):
+                index = _nearest_to_ray(
+                    [g.marker for g in ghosts], event.ray_origin, event.ray_direction
+                )
+            node = ghosts[index].node_id
+            count = 1 if self._picked is None else self._picked.count + 1
+            self._picked = Picked(node, fold.labels.get(node, ""), count)
+            log.info("viewer: ghost of node %d clicked", node)
+            _set_markdown(self._selection, self._selection_text(fold))
+
+    def _selection_text(self, fold: SearchFold) -> str:
+        lines = []
+        if self._focus is not None:
+            node = self._focus
+            q = fold.q.get(node)
+            lines.append(
+                f"**node #{node}** · {fold.labels.get(node, 'not in the tree at this step')}"
+                + (f" · Q {q:.1f} s" if q is not None else "")
+            )
+            if self._focus_bodies:
+                lines.append(
+                    f"<small>bodies where it puts them: {', '.join(self._focus_bodies)}</small>"
+                )
+        else:
+            lines.append("Select a node in the page's tree, or click a ghost.")
+        if self._picked is not None:
+            lines.append(
+                f"clicked: ghost of **node #{self._picked.node_id}** · {self._picked.label}"
+            )
+        lines.append(
+            "<small>magenta: the node's samples; cyan: its branch's; a click on a ghost names "
+            "its node</small>"
+        )
+        return "\n\n".join(lines)
 
     def _draw_failures(self, fold: SearchFold) -> int:
         points = [f.where for f in fold.failures if f.where is not None][-MAX_GHOSTS:]
@@ -798,7 +983,24 @@ def _bounds(bodies: Sequence[Body], built: Mapping[str, _BodyView]) -> tuple[Vec
 
 
 def _nothing_shown() -> dict[str, int]:
-    return {"failed_marked": 0, "tree_nodes": 0}
+    return {"failed_marked": 0, "tree_nodes": 0, "focus_markers": 0, "branch_markers": 0}
+
+
+def _nearest_to_ray(
+    markers: Sequence[Marker], origin: Sequence[float], direction: Sequence[float]
+) -> int:
+    """The index of the marker whose position (a path's nearest point) lies nearest the ray."""
+    o = np.asarray(origin, dtype=np.float64)
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / (float(np.linalg.norm(d)) or 1.0)
+    best, best_distance = 0, math.inf
+    for i, marker in enumerate(markers):
+        for p in marker.points or (marker.position,):
+            v = np.asarray(p, dtype=np.float64) - o
+            distance = float(np.linalg.norm(v - max(float(v @ d), 0.0) * d))
+            if distance < best_distance:
+                best, best_distance = i, distance
+    return best
 
 
 # --- meshes of the ghosts (vertices, faces), side "double" so winding does not matter ------------

@@ -77,6 +77,8 @@ class SearchFold:
         self.failures: list[Failure] = []
         self.q: dict[int, float] = {}  # node id -> predicted remaining seconds (learned planner)
         self.solution: int | None = None  # the node that binds the whole plan, once found
+        self.queries: dict[int, QueryView] = {}  # a successful node's query, decoded
+        self.labels: dict[int, str] = {}  # each node's label (its event's)
         self._pending: dict[int, Mapping[str, Any]] = {}  # stream_queried by the node it made
         self._effective: dict[int, float | None] | None = None  # _effective_q until next fold
 
@@ -136,6 +138,7 @@ class SearchFold:
         # Read everything first: a malformed event leaves the fold as it was.
         failure: Failure | None = None
         ghosts: list[Ghost] = []
+        made: QueryView | None = None
         if stream is not None and not success:
             where = None
             if self.view is not None:
@@ -152,11 +155,12 @@ class SearchFold:
                     self.loaded.decode(raw, f"node {node_id} output {i}")
                     for i, raw in enumerate(outputs)
                 )
-                drawn = self.view.markers(
-                    QueryView(str(stream), self._inputs(query), values), self.problem
-                )
-                ghosts = [Ghost(node_id, m) for m in drawn]
+                made = QueryView(str(stream), self._inputs(query), values)
+                ghosts = [Ghost(node_id, m) for m in self.view.markers(made, self.problem)]
         self.nodes[node_id] = TreeNode(node_id, parent_id, level, success)
+        self.labels[node_id] = str(event.get("label") or stream or "")
+        if made is not None:
+            self.queries[node_id] = made
         if parent is not None:
             self.nodes.setdefault(parent.node_id, parent).children.append(node_id)
         if failure is not None:
@@ -219,14 +223,29 @@ class SearchFold:
             return None
         return (min(self.q.values()), max(self.q.values()))
 
-    def solution_path(self) -> list[int]:
-        """Node ids from the root to the solution (empty before one is found)."""
+    def branch(self, node_id: int) -> list[int]:
+        """Node ids from the root down to ``node_id`` (empty for a node not in the tree)."""
         path: list[int] = []
-        current = self.solution
+        current: int | None = node_id
         while current is not None and current in self.nodes and current not in path:
             path.append(current)
             current = self.nodes[current].parent_id
         return path[::-1]
+
+    def branch_queries(self, node_id: int) -> list[QueryView]:
+        """The successful queries on the branch down to ``node_id``, in order."""
+        return [self.queries[n] for n in self.branch(node_id) if n in self.queries]
+
+    def markers_of(self, node_id: int) -> list[Marker]:
+        """The ghosts the domain draws for one node's samples (none for a failed node)."""
+        query = self.queries.get(node_id)
+        if query is None or self.view is None:
+            return []
+        return list(self.view.markers(query, self.problem))
+
+    def solution_path(self) -> list[int]:
+        """Node ids from the root to the solution (empty before one is found)."""
+        return [] if self.solution is None else self.branch(self.solution)
 
 
 def tree_layout(nodes: Mapping[int, TreeNode]) -> dict[int, tuple[float, int]]:

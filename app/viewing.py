@@ -31,9 +31,13 @@ class Viewer(Protocol):
         plan: dict[str, Any] | None,
         *,
         domain: str | None = None,
+        focus: int | None = None,
     ) -> None: ...
 
     def extend(self, events: Any) -> None: ...
+
+    @property
+    def picked(self) -> Any: ...
 
     def close(self) -> None: ...
 
@@ -44,7 +48,7 @@ class ViewerService:
         self.store = store
         self.hub = hub
         self.following: str | None = None  # run whose live events reach the view
-        self.shown: tuple[str, int | None] | None = None  # (run id, step) last asked for
+        self.shown: tuple[str, int | None, int | None] | None = None  # (run, step, node) asked
         self._last_seq = -1  # the last event the view has (viewer thread only)
         self._jobs: queue.Queue[Callable[[], None] | None] = queue.Queue()
         self._thread = threading.Thread(target=self._work, name="viewer", daemon=True)
@@ -57,11 +61,11 @@ class ViewerService:
     def url(self) -> str | None:
         return None if self.viewer is None else self.viewer.url
 
-    def follow(self, run_id: str, step: int | None) -> None:
-        """Show ``run_id`` after events ``0..step`` (all of them and live ones when None).
-        KeyError for an unknown run."""
+    def follow(self, run_id: str, step: int | None, node: int | None = None) -> None:
+        """Show ``run_id`` after events ``0..step`` (all of them and live ones when None), with
+        search node ``node`` selected (None: none). KeyError for an unknown run."""
         record = self.store.get_run(run_id)
-        self.shown = (run_id, step)
+        self.shown = (run_id, step, node)
         if self.viewer is None:
             return
         self.following = run_id if step is None else None
@@ -73,7 +77,7 @@ class ViewerService:
             self._last_seq = events[-1]["seq"] if events else -1
             ref = record.config.get("domain")
             domain = ref if isinstance(ref, str) else None
-            self.viewer.show(record.scene, record.seed, events, plan, domain=domain)
+            self.viewer.show(record.scene, record.seed, events, plan, domain=domain, focus=node)
 
         self._jobs.put(job)
 
@@ -113,7 +117,12 @@ class ViewerService:
     def _on_end(self, run_id: str, _status: str) -> None:
         """A followed run is over: show it whole, with its plan to animate when it has one."""
         if run_id == self.following:
-            self.follow(run_id, None)
+            node = self.shown[2] if self.shown is not None and self.shown[0] == run_id else None
+            self.follow(run_id, None, node)
+
+    def picked(self) -> Any:
+        """The ghost last clicked in the 3D view (its node), if any."""
+        return None if self.viewer is None else self.viewer.picked
 
     def _work(self) -> None:
         while True:

@@ -18,7 +18,9 @@ import contextlib
 import logging
 import multiprocessing
 import os
+import signal
 import threading
+import time
 from multiprocessing.connection import Connection, wait
 from multiprocessing.synchronize import Event as MpEvent
 from typing import Any
@@ -30,8 +32,10 @@ log = logging.getLogger(__name__)
 ORPHAN_EXIT_CODE = 3  # the exit code of a worker whose server went away
 
 
-def exit_with_parent(run_id: str) -> threading.Thread | None:
-    """End this process as soon as its parent (the server) is gone; None without a parent."""
+def exit_with_parent(what: str, *, grace_s: float | None = None) -> threading.Thread | None:
+    """End this process as soon as its parent (the server) is gone; None without a parent.
+    With ``grace_s``, it is first sent SIGTERM, so that it can stop what it started (a
+    benchmark's trial processes), and ended only if it is still there ``grace_s`` later."""
     parent = multiprocessing.parent_process()
     if parent is None:
         return None
@@ -39,7 +43,10 @@ def exit_with_parent(run_id: str) -> threading.Thread | None:
 
     def watch() -> None:
         wait([sentinel])
-        log.warning("run %s: the server is gone; the worker stops", run_id)
+        log.warning("%s: the server is gone; the worker stops", what)
+        if grace_s is not None:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(grace_s)
         os._exit(ORPHAN_EXIT_CODE)
 
     thread = threading.Thread(target=watch, name="watch-server", daemon=True)
@@ -74,7 +81,7 @@ def main(
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s worker %(name)s: %(message)s"
     )
-    exit_with_parent(run_id)
+    exit_with_parent(f"run {run_id}")
     from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
 

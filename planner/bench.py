@@ -236,6 +236,24 @@ def trial_order(config: BenchConfig) -> list[Trial]:
     return out
 
 
+def create_bench(
+    store: RunStore, config: BenchConfig, *, workers: int = 2, ray_address: str | None = None
+) -> str:
+    """Check a benchmark (:func:`check`) and record it, with no trial run yet; returns its id.
+    :func:`run_bench` with ``resume`` runs its trials (the dashboard records a benchmark this
+    way, then runs it in a process of its own)."""
+    info = check(config)
+    return store.create_bench(
+        {
+            **config.to_dict(),
+            **info,
+            "workers": workers,
+            "ray_address": ray_address,
+            "code": code_revision(),
+        }
+    )
+
+
 def run_bench(
     db: str | Path,
     config: BenchConfig | None = None,
@@ -272,16 +290,7 @@ def run_bench(
                 )
         else:
             assert config is not None
-            info = check(config)
-            bench_id = store.create_bench(
-                {
-                    **config.to_dict(),
-                    **info,
-                    "workers": workers,
-                    "ray_address": ray_address,
-                    "code": code_revision(),
-                }
-            )
+            bench_id = create_bench(store, config, workers=workers, ray_address=ray_address)
             done = set()
         store.set_bench_status(bench_id, "running")
     todo = [t for t in trial_order(config) if (t.seed, t.planner) not in done]

@@ -612,7 +612,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from planner.learning.train import format_report, load_records, train
+    from planner.learning.train import format_report, load_records, records_domain, train
 
     loaded = load_domain(args.domain) if args.domain else None
     records = load_records(args.db, domain=None if loaded is None else loaded.name)
@@ -622,14 +622,10 @@ def cmd_train(args: argparse.Namespace) -> int:
             raise ValueError(f"no stream queries of domain {loaded.name!r} in {where}")
         raise ValueError(f"no stream queries in {where}")
     if loaded is None:
-        domains = records.domains()
-        if len(domains) != 1 or "?" in domains:
-            found = ", ".join(f"{d} ({n} runs)" for d, n in domains.items())
-            raise ValueError(
-                f"the stores hold runs of {found}: choose the domain with --domain"
-                + (" ('?': runs whose scene no longer loads)" if "?" in domains else "")
-            )
-        loaded = records.domains_found[next(iter(domains))]
+        try:
+            loaded = records_domain(records)
+        except ValueError as exc:
+            raise ValueError(f"{exc} with --domain") from exc
     model, report = train(records, domain=loaded, seed=args.seed, epochs=args.epochs)
     model.save(args.out)
     if args.json:

@@ -89,36 +89,65 @@ def query_summary(outcomes: Iterable[QueryOutcome]) -> dict[str, Any]:
     return dict(sorted(streams.items()))
 
 
+def run_time_split(
+    planning_s: float, until_plans_s: float, outcomes: Iterable[QueryOutcome]
+) -> dict[str, Any]:
+    """Where one run's planning seconds went: until the abstract plans were found (top-k, and a
+    learned planner's model loading and stream order), the stream queries' own seconds (in
+    all and per stream), and the rest, the search itself (selection, a learned planner's
+    feature rows and predictions, events). ``outcomes`` are the run's queries."""
+    by_stream: dict[str, float] = {}
+    for q in outcomes:
+        by_stream[q.stream] = by_stream.get(q.stream, 0.0) + q.wall_s
+    queries = sum(by_stream.values())
+    return {
+        "planning_s": planning_s,
+        "until_plans_s": until_plans_s,
+        "queries_s": queries,
+        "queries_by_stream_s": dict(sorted(by_stream.items())),
+        "search_s": planning_s - until_plans_s - queries,
+    }
+
+
 def time_split(
     trials: Sequence[BenchTrialRecord],
     plans_at: Mapping[str, float],
     outcomes: Iterable[QueryOutcome],
-) -> dict[str, float | None]:
-    """Where a planner's planning seconds go, on average over ``trials``: until the abstract
-    plans are found (top-k, and a learned planner's model loading and stream order), the
-    stream queries' own seconds, and the rest, the search itself (selection, a learned
-    planner's feature rows and predictions, events)."""
+) -> dict[str, Any]:
+    """:func:`run_time_split` of a planner's trials, on average over the trials with a run."""
     ids = {t.run_id for t in trials if t.run_id and t.planning_s is not None}
     if not ids:
-        return {"planning_s": None, "until_plans_s": None, "queries_s": None, "search_s": None}
-    query_s: dict[str, float] = dict.fromkeys(ids, 0.0)
+        return {
+            "planning_s": None,
+            "until_plans_s": None,
+            "queries_s": None,
+            "queries_by_stream_s": {},
+            "search_s": None,
+        }
+    mine: dict[str, list[QueryOutcome]] = {run_id: [] for run_id in ids}
     for q in outcomes:
-        if q.run_id in query_s:
-            query_s[q.run_id] += q.wall_s
-    rows = [
-        (t.planning_s or 0.0, plans_at.get(t.run_id or "", 0.0), query_s[t.run_id or ""])
+        if q.run_id in mine:
+            mine[q.run_id].append(q)
+    splits = [
+        run_time_split(t.planning_s or 0.0, plans_at.get(t.run_id or "", 0.0), mine[t.run_id or ""])
         for t in trials
         if t.run_id in ids
     ]
-    n = len(rows)
-    planning = sum(r[0] for r in rows) / n
-    until = sum(r[1] for r in rows) / n
-    queries = sum(r[2] for r in rows) / n
+    n = len(splits)
+    streams = sorted({s for split in splits for s in split["queries_by_stream_s"]})
+
+    def mean(key: str) -> float:
+        return float(sum(split[key] for split in splits)) / n
+
     return {
-        "planning_s": planning,
-        "until_plans_s": until,
-        "queries_s": queries,
-        "search_s": planning - until - queries,
+        "planning_s": mean("planning_s"),
+        "until_plans_s": mean("until_plans_s"),
+        "queries_s": mean("queries_s"),
+        "queries_by_stream_s": {
+            stream: sum(split["queries_by_stream_s"].get(stream, 0.0) for split in splits) / n
+            for stream in streams
+        },
+        "search_s": mean("search_s"),
     }
 
 

@@ -10,7 +10,10 @@ A domain's :class:`DomainView` (its ``view`` hook) gives:
   the view counts and batches ("placements", "grasps", ...);
 - :meth:`DomainView.failure_at`: where a failed query was about (a red diamond is drawn there);
 - :meth:`DomainView.animate`: a bound plan as a :class:`Timeline` of body states, which the
-  view plays in real time.
+  view plays in real time;
+- optionally, :meth:`FocusView.focus`: where the bodies stand at one search node that the user
+  selected (the robot at the node's configuration), given the queries on its branch; the view
+  highlights the node's own ghosts and those of its branch either way.
 
 Units are metres and radians; quaternions are ``xyzw`` (pybullet's order; ``app/`` converts).
 """
@@ -21,7 +24,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, Protocol, runtime_checkable
 
 from planner.abstract.skeleton import GroundAction
 from planner.pddl.structs import Problem
@@ -284,4 +287,23 @@ class DomainView(Protocol):
     ) -> Timeline | None:
         """The bound plan (actions over objects, objects' decoded values) in time; None when
         the domain has nothing to play."""
+        ...
+
+
+@dataclass(frozen=True)
+class Focus:
+    """Where one selected search node puts the bodies (e.g. the robot at the configuration the
+    node bound), and markers to draw highlighted besides the node's own ghosts."""
+
+    bodies: Mapping[str, BodyState] = field(default_factory=dict)
+    markers: tuple[Marker, ...] = ()
+
+
+@runtime_checkable
+class FocusView(Protocol):
+    """The optional part of a :class:`DomainView` that poses the scene at a search node."""
+
+    def focus(self, branch: Sequence[QueryView], problem: Problem) -> Focus:
+        """The scene at the node whose branch (from its stream plan down to the node, the
+        successful queries in order) is ``branch``."""
         ...

@@ -1,12 +1,17 @@
-// The dashboard page: launch runs, list them, replay and watch one run's search.
+// The dashboard page: launch runs, list them, replay and watch one run's search; and, on pages
+// of their own (the hash says which), two runs compared (compare.js), benchmarks
+// (benchmarks.js) and models with their training (models.js).
 //
 // It talks only to the REST API and the websocket of docs/dashboard.md. The selected run's
 // events are kept in a Replay (tree.js); the step slider moves its cursor, a live run appends
 // to it, and the canvas (treeview.js) redraws at the next animation frame.
 
 import { ApiError, api, streamUrl } from "./api.js";
+import { BenchPage } from "./benchmarks.js";
 import { clearChart, drawQueries, drawTime } from "./charts.js";
+import { CompareView } from "./compare.js";
 import { escapeHtml, num, seconds, value, when } from "./format.js";
+import { ModelsPage } from "./models.js";
 import { Replay } from "./tree.js";
 import { TreeView, shortLabel } from "./treeview.js";
 
@@ -14,6 +19,7 @@ const LIVE = new Set(["queued", "running"]);
 const POLL_LIVE_MS = 1500; // runs list refresh while some run is queued or running
 const POLL_IDLE_MS = 8000; // otherwise
 const VIEWER_DEBOUNCE_MS = 200;
+const PICKED_POLL_MS = 1500; // how often the page asks which ghost was clicked in the 3D view
 const CHART_DELAY_MS = 250; // charts follow the step at most this often
 const RECONNECT_MS = [1000, 2000, 5000, 10000]; // waits before reconnecting a dropped stream
 const PAGE = 50; // runs per page of the list
@@ -67,6 +73,8 @@ const el = {
   chartTime: $("chart-time"),
   viewerFrame: $("viewer-frame"),
   viewerNote: $("viewer-note"),
+  viewerPicked: $("viewer-picked"),
+  pages: document.querySelectorAll("[data-page]"),
 };
 
 const app = {
@@ -88,6 +96,7 @@ const view = new TreeView(el.canvas, {
   onSelect: (node) => {
     app.selectedId = node ? node.id : null;
     renderInspector();
+    scheduleViewer();
   },
   onHover: showTooltip,
 });
@@ -228,6 +237,17 @@ async function loadForm() {
     .map((s) => `<option value="${escapeHtml(s.name)}">${escapeHtml(s.name)}</option>`)
     .join("");
   syncForm();
+  const planners = [...el.planner.options].map((o) => o.value);
+  benchPage.setChoices(app.scenes, planners, app.models);
+  modelsPage.setScenes(app.scenes);
+  modelsPage.setModels(app.models);
+}
+
+/** The models offered changed (a training job finished): every form offers the new ones. */
+function setModels(models) {
+  app.models = models;
+  syncForm();
+  benchPage.setModels(models);
 }
 
 function syncForm() {
@@ -436,11 +456,13 @@ function renderHeader() {
     : "";
   el.header.innerHTML = `
     <span class="run-name" title="${escapeHtml(d.id)}">Run ${escapeHtml(d.id.slice(0, 8))}</span>
-    <span>${escapeHtml(d.scene)} · ${escapeHtml(d.planner)} · seed ${escapeHtml(d.seed)}</span>
+    <span>${escapeHtml(d.scene)} · ${escapeHtml(d.planner)} · seed ${escapeHtml(d.seed)}${d.config?.model_name ? ` · model <a href="#model=${encodeURIComponent(d.config.model_name)}" data-testid="run-model">${escapeHtml(d.config.model_name)}</a>` : ""}</span>
     <span class="badge ${escapeHtml(d.status)}" data-testid="run-status">${escapeHtml(d.status)}</span>
     <span class="figures" data-testid="run-header-figures">${figures.join(" · ")}</span>
     ${message}
-    ${cancel}`;
+    ${cancel}
+    ${compareControl(d)}`;
+  bindCompare(d);
   const button = $("btn-cancel");
   if (button) {
     button.addEventListener("click", async () => {
@@ -453,6 +475,30 @@ function renderHeader() {
       refresh();
     });
   }
+}
+
+/** "Compare with": the other runs of the list, the same scene first. */
+function compareControl(d) {
+  const others = app.runs.filter((r) => r.id !== d.id);
+  if (others.length === 0) return "";
+  others.sort((x, y) => (y.scene === d.scene) - (x.scene === d.scene));
+  const options = others
+    .map(
+      (r) =>
+        `<option value="${escapeHtml(r.id)}">${escapeHtml(r.scene)} · ${escapeHtml(r.planner)} · seed ${escapeHtml(r.seed)} · ${escapeHtml(r.id.slice(0, 8))}</option>`,
+    )
+    .join("");
+  return `<span class="compare-with"><select id="compare-with" data-testid="compare-with" aria-label="run to compare with">${options}</select>
+    <button type="button" id="btn-compare" data-testid="btn-compare">Compare</button></span>`;
+}
+
+function bindCompare(d) {
+  const button = $("btn-compare");
+  if (!button) return;
+  button.addEventListener("click", () => {
+    const other = $("compare-with").value;
+    location.hash = `#compare=${encodeURIComponent(d.id)},${encodeURIComponent(other)}`;
+  });
 }
 
 // --- stepping --------------------------------------------------------------------------------
@@ -828,7 +874,47 @@ function viewerBody() {
   const replay = app.replay;
   const atEnd = app.follow && replay.step >= replay.last; // null: everything, live included
   const step = atEnd || replay.step < 0 ? null : replay.events[replay.step].seq;
-  return { run_id: app.run.id, step };
+  const body = { run_id: app.run.id, step };
+  if (app.selectedId !== null && app.replay.tree.byId.has(app.selectedId)) body.node = app.selectedId;
+  return body;
+}
+
+let pickedCount = 0; // the ghost clicks already shown
+let pickedTimer = 0;
+
+/**
+ * A ghost clicked in the 3D view names its node: the page says which and selects it in the
+ * tree. The viewer keeps the last click (GET /api/viewer); the page asks while it shows a run.
+ */
+async function pollPicked() {
+  clearTimeout(pickedTimer);
+  if (!app.health?.viewer_url) return;
+  if (currentPage === "runs" && app.run && app.run.id !== null && !document.hidden) {
+    try {
+      const shown = await api("/api/viewer");
+      const picked = shown.picked;
+      if (picked && picked.count !== pickedCount && shown.run_id === app.run.id) {
+        pickedCount = picked.count;
+        showPicked(picked);
+      }
+    } catch {
+      // the next poll tries again
+    }
+  }
+  pickedTimer = setTimeout(pollPicked, PICKED_POLL_MS);
+}
+
+function showPicked(picked) {
+  el.viewerPicked.innerHTML =
+    `3D view: ghost of <b>node #${escapeHtml(picked.node_id)}</b>` +
+    (picked.label ? ` · <code>${escapeHtml(picked.label)}</code>` : "") +
+    " (selected in the tree)";
+  el.viewerPicked.hidden = false;
+  if (app.replay.tree.byId.has(picked.node_id)) {
+    app.selectedId = picked.node_id;
+    renderInspector();
+    view.requestDraw();
+  }
 }
 
 /**
@@ -928,15 +1014,65 @@ window.dashboard = {
     view.fit();
   },
   selectRun,
+  page: () => currentPage,
+  compare: () => compareView.state(),
+  /** Where the benchmark scatter draws seed ``seed`` (client px), or null. */
+  scatterPoint: (seed) => benchPage.pointPosition(seed),
+  benchMs: () => benchPage.ms,
+  showPicked,
 };
+
+// --- pages: the hash says which (#run=ID, #compare=A,B, #benchmarks, #bench=ID, #models, #model=N)
+
+const compareView = new CompareView();
+const benchPage = new BenchPage({
+  openTraining: (benchId, planner) => {
+    modelsPage.prefill(benchId, planner);
+    location.hash = "#models";
+  },
+});
+const modelsPage = new ModelsPage({ onModels: setModels });
+let currentPage = "runs";
+
+function showPage(name) {
+  currentPage = name;
+  const nav = name === "compare" ? "runs" : name;
+  for (const node of el.pages) {
+    if (node.tagName === "A") node.classList.toggle("active", node.dataset.page === nav);
+    else node.hidden = node.dataset.page !== name;
+  }
+  document.body.dataset.page = name;
+}
+
+function route() {
+  const params = new URLSearchParams(location.hash.slice(1));
+  const [key] = [...params.keys()];
+  const arg = key === undefined ? null : params.get(key);
+  const page = { compare: "compare", benchmarks: "benchmarks", bench: "benchmarks", models: "models", model: "models" }[key] ?? "runs";
+  showPage(page);
+  benchPage.show(page === "benchmarks", key === "bench" ? arg : null);
+  modelsPage.show(page === "models", key === "model" ? arg : null);
+  if (page === "compare") {
+    const [a, b] = (arg ?? "").split(",");
+    if (a && b) compareView.show(a, b);
+    return;
+  }
+  if (page === "runs") {
+    view.requestDraw();
+    scheduleCharts();
+    if (key === "run" && arg && app.run?.id !== arg) selectRun(arg);
+    else if (key === "run" && arg) renderHeader();
+  }
+}
 
 // --- start ---------------------------------------------------------------------------------------
 
-const fromHash = new URLSearchParams(location.hash.slice(1)).get("run");
 loadForm();
 loadReports();
 updateStep();
 drawCharts();
 refresh().then(() => {
-  if (fromHash) selectRun(fromHash);
+  route();
+  window.addEventListener("hashchange", route);
+  pollPicked();
 });

@@ -294,3 +294,50 @@ export class Replay {
     return target;
   }
 }
+
+/**
+ * A whole tree from the columns of GET /api/runs/{id}/tree (the compare view draws it as it
+ * is at the end of the run; no stepping, so no undo).
+ */
+export function treeFromColumns(cols) {
+  const tree = new SearchTree();
+  const root = tree.root;
+  if (cols.ids.length > 0) {
+    tree.byId.delete(root.id);
+    root.id = cols.ids[0];
+    root.label = cols.labels[0] || "root";
+    tree.byId.set(root.id, root);
+  }
+  for (let i = 1; i < cols.ids.length; i++) {
+    const parent = tree.byId.get(cols.parents[i]) ?? root;
+    const s = cols.streams[i];
+    const node = makeNode(
+      cols.ids[i],
+      parent,
+      cols.plans[i],
+      cols.depths[i],
+      parent.level + 1,
+      s >= 0 ? cols.stream_names[s] : null,
+      cols.success[i],
+      [],
+      [],
+      cols.labels[i],
+    );
+    if (cols.q[i] !== null && cols.q[i] !== undefined) {
+      node.pred = { q: cols.q[i] };
+      tree.predicted += 1;
+    }
+    tree.byId.set(node.id, node);
+    tree.order.push(node);
+    parent.children.push(node);
+    tree.added += 1;
+    if (!node.success) tree.failed += 1;
+  }
+  if (cols.solution !== null && cols.solution !== undefined) {
+    tree.solution = { node_id: cols.solution };
+  }
+  tree.plans = { plans: cols.plan_list ?? [] };
+  tree.predVersion += 1;
+  tree.layoutDirty = true;
+  return tree;
+}

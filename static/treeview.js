@@ -45,6 +45,8 @@ export class TreeView {
     this.onHover = onHover ?? (() => {});
     this.onViewChange = onViewChange ?? (() => {});
     this.qRange = null; // {lo, hi} of the predicted Q drawn last
+    this.scale = null; // {lo, hi}: a colour scale given from outside (two trees, one scale)
+    this.marks = new Map(); // node id -> colour of an extra ring (where two searches parted)
     this._frame = 0;
     this._buckets = Array.from({ length: BUCKETS + 1 }, () => []);
     this._bind();
@@ -210,7 +212,25 @@ export class TreeView {
 
     // The solution leaf and the selected node get rings.
     if (tree.solution !== null) this._ring(tree.byId.get(tree.solution.node_id), r + 3, SOLUTION);
+    for (const [id, colour] of this.marks) this._ring(tree.byId.get(id), r + 6, colour, 3);
     if (this.selectedId !== null) this._ring(tree.byId.get(this.selectedId), r + 4, SELECTED);
+  }
+
+  /** Zoom in on node ``id`` and put it in the middle of the canvas. */
+  centreOn(id, zoom = 6) {
+    const node = this.tree?.byId.get(id);
+    if (node === undefined) return;
+    const { w, h } = this._size();
+    if (this.tree.layoutDirty) this.tree.layout();
+    if (this.autoFit) this._fit(w, h);
+    this.autoFit = false;
+    const v = this.view;
+    v.sx = Math.min(v.sx * zoom, MAX_SX);
+    v.sy = Math.min(Math.max(v.sy, 24), 80);
+    v.tx = w / 2 - node.x * v.sx;
+    v.ty = h / 2 - node.level * v.sy;
+    this.requestDraw();
+    this.onViewChange();
   }
 
   /**
@@ -219,6 +239,7 @@ export class TreeView {
    * Recomputed only when a prediction changed.
    */
   _qScale(tree) {
+    if (this.scale !== null) return this.scale;
     if (this._q && this._q.tree === tree && this._q.version === tree.predVersion) return this._q;
     let lo = Infinity;
     let hi = -Infinity;
@@ -236,14 +257,14 @@ export class TreeView {
     return this._q;
   }
 
-  _ring(node, radius, colour) {
+  _ring(node, radius, colour, width = 2) {
     if (node === undefined) return;
     const { sx, sy, tx, ty } = this.view;
     const ctx = this.ctx;
     ctx.beginPath();
     ctx.arc(tx + node.x * sx, ty + node.level * sy, radius, 0, 2 * Math.PI);
     ctx.strokeStyle = colour;
-    ctx.lineWidth = 2;
+    ctx.lineWidth = width;
     ctx.stroke();
   }
 

@@ -10,7 +10,17 @@ from typing import Any
 
 from planner.abstract.skeleton import GroundAction
 from planner.pddl.structs import Problem
-from planner.view import Body, BodyState, Box, Keyframes, Marker, QueryView, SceneView, Vec3
+from planner.view import (
+    Body,
+    BodyState,
+    Box,
+    Focus,
+    Keyframes,
+    Marker,
+    QueryView,
+    SceneView,
+    Vec3,
+)
 
 from .scene import START_CONF, Tabletop, start_pose_name, tabletop
 from .values import Conf2D, Path2D, Pose2D
@@ -101,6 +111,19 @@ class TabletopView:
             if isinstance(value, Conf2D):
                 return (value.x, value.y, GRIPPER_Z)
         return None
+
+    def focus(self, branch: Sequence[QueryView], problem: Problem) -> Focus:
+        """The gripper at the last configuration the branch bound (a path's end counts)."""
+        conf: Conf2D | None = None
+        for query in branch:
+            for value in query.outputs:
+                if isinstance(value, Conf2D):
+                    conf = value
+                elif isinstance(value, Path2D):
+                    conf = value.end
+        if conf is None:
+            return Focus()
+        return Focus(bodies={GRIPPER: BodyState((conf.x, conf.y, GRIPPER_Z))})
 
     def animate(
         self, actions: Sequence[GroundAction], values: Mapping[str, Any], problem: Problem

@@ -16,9 +16,10 @@ zeroed for half the rows; Gaussian noise on every feature."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -62,7 +63,7 @@ class LoadedRecords(list[QueryRecord]):
         self,
         records: Iterable[QueryRecord],
         *,
-        sources: Sequence[Path] = (),
+        sources: Sequence[Path | str] = (),
         run_scenes: Mapping[str, str] | None = None,
         run_seeds: Mapping[str, int] | None = None,
         run_domains: Mapping[str, str] | None = None,
@@ -122,9 +123,15 @@ def _with_static_context(query: QueryRecord, static: Mapping[str, Any]) -> Query
     return dataclasses.replace(query, context={**missing, **query.context})
 
 
-def load_records(db_paths: Sequence[Path], *, domain: str | None = None) -> LoadedRecords:
-    """Every stream query in the given run stores (SQLite files), in stored order; with
-    ``domain`` (a domain's name), only the queries of that domain's runs."""
+def load_records(
+    db_paths: Sequence[Path | str],
+    *,
+    domain: str | None = None,
+    run_ids: Collection[str] | None = None,
+) -> LoadedRecords:
+    """Every stream query in the given run stores (SQLite files, or database URLs), in stored
+    order; with ``domain`` (a domain's name), only the queries of that domain's runs; with
+    ``run_ids``, only those of these runs."""
     records: list[QueryRecord] = []
     scenes: dict[str, str] = {}
     seeds: dict[str, int] = {}
@@ -132,12 +139,14 @@ def load_records(db_paths: Sequence[Path], *, domain: str | None = None) -> Load
     loaded_domains: dict[str, LoadedDomain] = {}
     seen: set[tuple[str, int]] = set()
     cache: dict[Any, _SceneInfo] = {}
+    wanted = None if run_ids is None else sorted(set(run_ids))
     for raw in db_paths:
-        path = Path(raw)
-        if not path.is_file():
+        url = isinstance(raw, str) and "://" in raw
+        path: Path | str = raw if url else Path(raw)
+        if isinstance(path, Path) and not path.is_file():
             raise FileNotFoundError(f"no run store at {path}")
         with RunStore(path) as store:
-            queries = store.stream_queries()
+            queries = store.stream_queries(run_ids=wanted)
             info: dict[str, _SceneInfo] = {}
             for run_id in sorted({q.run_id for q in queries}):
                 run = store.get_run(run_id)
@@ -160,7 +169,7 @@ def load_records(db_paths: Sequence[Path], *, domain: str | None = None) -> Load
         log.info("%s: %d stream queries (%d kept)", path, len(queries), kept)
     return LoadedRecords(
         records,
-        sources=[Path(p) for p in db_paths],
+        sources=[p if isinstance(p, str) and "://" in p else Path(p) for p in db_paths],
         run_scenes=scenes,
         run_seeds=seeds,
         run_domains=domains,
@@ -168,7 +177,55 @@ def load_records(db_paths: Sequence[Path], *, domain: str | None = None) -> Load
     )
 
 
+def records_domain(records: LoadedRecords) -> LoadedDomain:
+    """The one domain of the records' runs; ValueError says which domains they hold when there
+    are several, or runs whose scene no longer loads."""
+    domains = records.domains()
+    if len(domains) != 1 or "?" in domains:
+        found = ", ".join(f"{d} ({n} runs)" for d, n in domains.items()) or "no runs"
+        raise ValueError(
+            f"the runs are of {found}: choose one domain"
+            + (" ('?': runs whose scene no longer loads)" if "?" in domains else "")
+        )
+    return records.domains_found[next(iter(domains))]
+
+
 # --- the report ------------------------------------------------------------------------------
+
+
+CALIBRATION_BINS = 10  # equal-width bins of predicted P_S in the calibration of a stream
+
+
+@dataclass(frozen=True)
+class CalibrationBin:
+    """Validation queries whose predicted ``P_S`` fell in ``[low, high)``: how many, their mean
+    prediction and the fraction that succeeded (a calibrated model has the two equal)."""
+
+    low: float
+    high: float
+    n: int
+    predicted: float
+    observed: float
+
+
+def calibration(
+    labels: npt.ArrayLike, p_s: npt.ArrayLike, bins: int = CALIBRATION_BINS
+) -> tuple[CalibrationBin, ...]:
+    """Equal-width bins of the predictions, the empty ones left out (1.0 falls in the last)."""
+    y = np.asarray(labels, dtype=bool)
+    p = np.asarray(p_s, dtype=np.float64)
+    index = np.minimum((p * bins).astype(int), bins - 1)
+    out = []
+    for b in range(bins):
+        where = index == b
+        n = int(where.sum())
+        if n:
+            out.append(
+                CalibrationBin(
+                    b / bins, (b + 1) / bins, n, float(p[where].mean()), float(y[where].mean())
+                )
+            )
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -189,6 +246,8 @@ class StreamReport:
     prior_mae_r_s: float | None
     prior_mae_r_f: float | None
     prior_mae_r_m: float | None
+    # Predicted P_S on validation, binned: how often the queries of each bin succeeded.
+    calibration: tuple[CalibrationBin, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -433,19 +492,55 @@ def _new_network(
     return net
 
 
+@dataclass(frozen=True)
+class TrainProgress:
+    """How far training is: stream ``index`` (from 0) of ``streams`` is at ``epoch`` of
+    ``epochs`` (0 when it starts; a stream left to its prior jumps to the end)."""
+
+    stream: str
+    index: int
+    streams: int
+    epoch: int
+    epochs: int
+
+    @property
+    def fraction(self) -> float:
+        return (self.index + self.epoch / max(self.epochs, 1)) / max(self.streams, 1)
+
+
+ProgressCallback = Callable[[TrainProgress], None]
+PROGRESS_EVERY = 10  # epochs between two progress reports
+
+
+def _epochs_of(
+    say: ProgressCallback, stream: str, index: int, streams: int, epochs: int
+) -> Callable[[int], None]:
+    """What tells ``say`` the epochs of one stream."""
+    return lambda epoch: say(TrainProgress(stream, index, streams, epoch, epochs))
+
+
 def _run_adam(
-    net: StreamNet, batch: _Batch, corruption: _Corruption, *, epochs: int, seed: int
+    net: StreamNet,
+    batch: _Batch,
+    corruption: _Corruption,
+    *,
+    epochs: int,
+    seed: int,
+    on_epoch: Callable[[int], None] | None = None,
 ) -> None:
-    """Full-batch Adam, each step on freshly corrupted rows."""
+    """Full-batch Adam, each step on freshly corrupted rows; ``on_epoch(n)`` every
+    :data:`PROGRESS_EVERY` epochs."""
     generator = torch.Generator().manual_seed(seed)
     optimiser = torch.optim.Adam(net.parameters(), lr=LEARNING_RATE, weight_decay=WEIGHT_DECAY)
     net.train()
-    for _ in range(epochs):
+    for epoch in range(epochs):
         optimiser.zero_grad()
         out = net(corruption.apply(batch.x, generator))
         loss = _loss(out, batch.success, batch.z, batch.mask)
         loss.backward()  # type: ignore[no-untyped-call]
         optimiser.step()
+        if on_epoch is not None and (epoch + 1) % PROGRESS_EVERY == 0:
+            on_epoch(epoch + 1)
     net.eval()
 
 
@@ -457,13 +552,15 @@ def _fit_stream(
     *,
     seed: int,
     epochs: int,
+    on_epoch: Callable[[int], None] | None = None,
 ) -> StreamNetwork:
     t = _Targets.of(records)
     moves = bool((t.execution_s > 0).any())
     x = featurizer.matrix(stream, ((r.inputs, r.context) for r in records))
     net = _new_network(x, t, moves, prior, seed)
     corruption = _Corruption.of(featurizer, stream)
-    _run_adam(net, _Batch.of(x, t, moves, net), corruption, epochs=epochs, seed=seed)
+    batch = _Batch.of(x, t, moves, net)
+    _run_adam(net, batch, corruption, epochs=epochs, seed=seed, on_epoch=on_epoch)
     heads = [bool(t.head_masks(moves)[:, j].any()) for j in range(len(COST_HEADS))]
     return StreamNetwork(net, (heads[0], heads[1], heads[2]))
 
@@ -508,6 +605,7 @@ def _evaluate(
         prior_mae_r_s=prior_mae[0],
         prior_mae_r_f=prior_mae[1],
         prior_mae_r_m=prior_mae[2],
+        calibration=calibration(t.success, predicted.p_s),
     )
 
 
@@ -520,12 +618,14 @@ def train(
     val_fraction: float = 0.2,
     min_queries: int = 30,
     metadata: Mapping[str, Any] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> tuple[CostModel, TrainReport]:
     """Fit one network per stream on the training runs and report on the validation runs.
 
     ``domain`` gives the value types and the state features of the rows. ``metadata`` is
     stored in the model file, on top of what is known: the number of runs and queries, seed,
-    date and, for :func:`load_records` output, the data files and scene names.
+    date, the validation report and, for :func:`load_records` output, the data files and
+    scene names. ``progress`` hears how far training is (:class:`TrainProgress`).
     """
     if not records:
         raise ValueError("no stream queries to train on")
@@ -544,8 +644,10 @@ def train(
     networks: dict[str, StreamNetwork] = {}
     priors: dict[str, Prior] = {}
     fallback: set[str] = set()
+    say = progress or (lambda _p: None)
     with torch_threads(TORCH_THREADS):
         for index, stream in enumerate(streams):
+            say(TrainProgress(stream, index, len(streams), 0, epochs))
             ours = [r for r in training if r.stream == stream]
             total = sum(1 for r in records if r.stream == stream)
             t = _Targets.of(ours or [r for r in records if r.stream == stream])
@@ -563,7 +665,13 @@ def train(
                 fallback.add(stream)
                 continue
             networks[stream] = _fit_stream(
-                ours, featurizer, stream, priors[stream], seed=seed * 1000 + index, epochs=epochs
+                ours,
+                featurizer,
+                stream,
+                priors[stream],
+                seed=seed * 1000 + index,
+                epochs=epochs,
+                on_epoch=_epochs_of(say, stream, index, len(streams), epochs),
             )
             log.info("stream %s: trained on %d queries", stream, len(ours))
     all_t = _Targets.of(training)
@@ -613,4 +721,6 @@ def train(
             )
         )
     report = TrainReport(tuple(reports), train_runs, val_runs, seed, epochs)
+    # The file carries its validation figures (as plain JSON data, what a loaded file holds).
+    model.metadata["validation"] = json.loads(json.dumps(report.to_dict(), allow_nan=False))
     return model, report

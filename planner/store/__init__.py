@@ -1,6 +1,7 @@
 """The record of runs: every event and every stream query, in SQLite through SQLAlchemy."""
 
 from planner.store.db import (
+    BENCH_STATUSES,
     FINAL_STATUSES,
     LIVE_STATUSES,
     MAX_INT,
@@ -17,6 +18,7 @@ from planner.store.db import (
 from planner.store.owner import is_alive, process_token
 
 __all__ = [
+    "BENCH_STATUSES",
     "FINAL_STATUSES",
     "LIVE_STATUSES",
     "MAX_INT",

@@ -63,6 +63,9 @@ log = logging.getLogger(__name__)
 RUN_STATUSES = ("queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted")
 FINAL_STATUSES = RUN_STATUSES[2:]  # what finish_run accepts
 LIVE_STATUSES = RUN_STATUSES[:2]  # not finished yet
+# A benchmark runs, is done, stopped before its end (resumable), or was cancelled by its user
+# (resumable too).
+BENCH_STATUSES = ("running", "done", "interrupted", "cancelled")
 MAX_INT = 2**63 - 1  # SQLite's largest integer: bigger numbers never reach a query
 INTERRUPTED = "the process running it stopped before it finished"
 
@@ -148,8 +151,9 @@ class BenchRow(Base):
     id: Mapped[str] = mapped_column(String(32), primary_key=True)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
     finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
-    status: Mapped[str] = mapped_column(String(16))  # running, done, interrupted
+    status: Mapped[str] = mapped_column(String(16))  # one of BENCH_STATUSES
     config: Mapped[str] = mapped_column(Text)  # JSON: scene, planners, seeds, budget, model ...
+    owner: Mapped[str | None] = mapped_column(Text)  # host:pid:start of the process running it
 
 
 class BenchTrialRow(Base):
@@ -271,6 +275,18 @@ class BenchRecord:
     finished_at: datetime | None
     status: str
     config: dict[str, Any]
+    owner: str | None = None  # the process running it (host:pid:start), while it runs
+
+    @classmethod
+    def from_row(cls, row: BenchRow) -> BenchRecord:
+        return cls(
+            row.id,
+            _utc(row.created_at),
+            _utc(row.finished_at) if row.finished_at is not None else None,
+            row.status,
+            json.loads(row.config),
+            row.owner,
+        )
 
 
 @dataclass(frozen=True)
@@ -344,7 +360,11 @@ def _create_tables(engine: Engine, attempts: int = 10) -> None:
 
 # Columns added after stores were first written, as (table, column, SQL type): a store from an
 # older version gets them (NULL in its old rows) when it is opened.
-_ADDED_COLUMNS = (("stream_queries", "reason", "TEXT"), ("runs", "owner", "TEXT"))
+_ADDED_COLUMNS = (
+    ("stream_queries", "reason", "TEXT"),
+    ("runs", "owner", "TEXT"),
+    ("benchmarks", "owner", "TEXT"),
+)
 # Indices added the same way (CREATE INDEX IF NOT EXISTS), as (name, table, columns).
 _ADDED_INDICES = (("ix_runs_created_at", "runs", "created_at"),)
 
@@ -669,6 +689,24 @@ class RunStore:
             out.append(event_from_dict(data))
         return out
 
+    def events_of(self, run_id: str, types: Collection[str]) -> list[dict[str, Any]]:
+        """The run's events of some types, in order, as the dicts :func:`event_to_dict` makes,
+        read without building the event objects (fast for a whole tree: what the dashboard
+        draws and compares)."""
+        query = (
+            select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
+            .where(EventRow.run_id == run_id, EventRow.type.in_(list(types)))
+            .order_by(EventRow.seq)
+        )
+        out: list[dict[str, Any]] = []
+        with self.engine.connect() as conn:
+            self._require(conn, run_id)
+            for seq, t, type_, payload in conn.execute(query):
+                data = json.loads(payload)
+                data.update(type=type_, run_id=run_id, seq=seq, t=t)
+                out.append(data)
+        return out
+
     def last_seq(self, run_id: str) -> int:
         """The highest stored seq of the run, -1 if it has no events."""
         with self.engine.connect() as conn:
@@ -726,7 +764,8 @@ class RunStore:
 
     # benchmarks
 
-    def create_bench(self, config: dict[str, Any]) -> str:
+    def create_bench(self, config: dict[str, Any], *, owner: str | None = None) -> str:
+        """Record a new benchmark as ``running``, owned by ``owner`` (default: this process)."""
         bench_id = uuid.uuid4().hex[:12]
         with self.engine.begin() as conn:
             conn.execute(
@@ -735,6 +774,7 @@ class RunStore:
                     created_at=datetime.now(UTC),
                     status="running",
                     config=_dumps(config),
+                    owner=owner or process_token(),
                 )
             )
         return bench_id
@@ -747,38 +787,61 @@ class RunStore:
                 raise KeyError(
                     f"unknown benchmark {bench_id!r} (known: {', '.join(known[:10]) or 'none'})"
                 )
-            return BenchRecord(
-                row.id,
-                _utc(row.created_at),
-                _utc(row.finished_at) if row.finished_at is not None else None,
-                row.status,
-                json.loads(row.config),
-            )
+            return BenchRecord.from_row(row)
 
     def list_benches(self) -> list[BenchRecord]:
         with Session(self.engine) as session:
             rows = session.scalars(select(BenchRow).order_by(BenchRow.created_at.desc()))
-            return [
-                BenchRecord(
-                    r.id,
-                    _utc(r.created_at),
-                    _utc(r.finished_at) if r.finished_at is not None else None,
-                    r.status,
-                    json.loads(r.config),
-                )
-                for r in rows
-            ]
+            return [BenchRecord.from_row(r) for r in rows]
 
-    def set_bench_status(self, bench_id: str, status: str) -> None:
-        with self.engine.begin() as conn:
-            conn.execute(
-                update(BenchRow)
-                .where(BenchRow.id == bench_id)
-                .values(
-                    status=status,
-                    finished_at=datetime.now(UTC) if status != "running" else None,
-                )
+    def set_bench_status(self, bench_id: str, status: str, *, owner: str | None = None) -> None:
+        """A benchmark's new status; ``running`` records who runs it now (``owner``, default
+        this process: the one resuming it)."""
+        if status not in BENCH_STATUSES:
+            raise ValueError(
+                f"unknown benchmark status {status!r} (known: {', '.join(BENCH_STATUSES)})"
             )
+        values: dict[str, Any] = {
+            "status": status,
+            "finished_at": datetime.now(UTC) if status != "running" else None,
+        }
+        if status == "running":
+            values["owner"] = owner or process_token()
+        with self.engine.begin() as conn:
+            conn.execute(update(BenchRow).where(BenchRow.id == bench_id).values(**values))
+
+    def settle_benches(self, *, skip: Collection[str] = ()) -> int:
+        """Benchmarks still ``running`` whose process is gone (killed, a crashed machine) are
+        ``interrupted``, resumable; returns how many. Those of live processes are left alone."""
+        with self.engine.connect() as conn:
+            running = conn.execute(
+                select(BenchRow.id, BenchRow.owner).where(BenchRow.status == "running")
+            ).all()
+        settled = 0
+        for bench_id, owner in running:
+            if bench_id in skip or is_alive(owner):
+                continue
+            with self.engine.begin() as conn:
+                done = conn.execute(
+                    update(BenchRow)
+                    .where(BenchRow.id == bench_id, BenchRow.status == "running")
+                    .values(status="interrupted", finished_at=datetime.now(UTC))
+                )
+            if done.rowcount:
+                settled += 1
+                log.info("benchmark %s: its process is gone; now interrupted", bench_id)
+        return settled
+
+    def bench_progress(self) -> dict[str, dict[str, dict[str, int]]]:
+        """Per benchmark, per planner: how many trials ended with each status (one query)."""
+        query = select(
+            BenchTrialRow.bench_id, BenchTrialRow.planner, BenchTrialRow.status, func.count()
+        ).group_by(BenchTrialRow.bench_id, BenchTrialRow.planner, BenchTrialRow.status)
+        out: dict[str, dict[str, dict[str, int]]] = {}
+        with self.engine.connect() as conn:
+            for bench_id, planner, status, count in conn.execute(query):
+                out.setdefault(bench_id, {}).setdefault(planner, {})[status] = int(count)
+        return out
 
     def record_trial(self, trial: BenchTrialRecord) -> None:
         """Store how one trial ended (a re-run of the same seed and planner replaces it)."""

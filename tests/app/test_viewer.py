@@ -373,3 +373,70 @@ def test_the_tutorial_domain_is_drawn_from_its_scene_description(viewer: RunView
     assert viewer.plan_seconds == pytest.approx(
         sum(out.values[a.args[2]].seconds for a in moves) + 0.5 * (len(out.actions) - len(moves))
     )
+
+
+def _nodes(events: Events) -> dict[int, dict[str, Any]]:
+    return {e["node_id"]: e for e in events if e["type"] == "node_added"}
+
+
+def _branch(nodes: dict[int, dict[str, Any]], node_id: int) -> list[int]:
+    out = []
+    current: int | None = node_id
+    while current in nodes:
+        out.append(current)
+        current = nodes[current]["parent_id"]
+    return out[::-1]
+
+
+def test_a_selected_kitchen_node_puts_the_robot_at_its_configuration(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, plan = kitchen_run
+    nodes = _nodes(events)
+    ik = next(n for n in nodes.values() if n["stream"] == "inverse-kinematics" and n["success"])
+    viewer.show("kitchen-1", 0, events, plan, focus=ik["node_id"])
+    counts = viewer.counts
+    assert counts["focus"] == ik["node_id"]
+    assert counts["focus_markers"] == 1  # its configuration's arrow, highlighted
+    # The branch's own samples (its grasp, placements, motions above it) in the other colour.
+    ancestors = [nodes[n] for n in _branch(nodes, ik["node_id"])[:-1]]
+    drawn = ("sample-grasp", "sample-placement", "inverse-kinematics", "plan-motion")
+    sampled = [n for n in ancestors if n["stream"] in drawn]
+    assert counts["branch_markers"] == len(sampled)
+    conf = ik["outputs"][0]
+    robot = viewer.focus_bodies["pr2"]
+    assert robot.position[:2] == pytest.approx(conf["base"][:2])
+    assert robot.joints is not None and robot.joints["torso_lift_joint"] == pytest.approx(
+        conf["torso"]
+    )
+    # A motion node: its path highlighted, the robot where the motion ends.
+    motion = next(n for n in nodes.values() if n["stream"] == "plan-motion" and n["success"])
+    viewer.show("kitchen-1", 0, events, plan, focus=motion["node_id"])
+    end = motion["outputs"][0]["end"]
+    assert viewer.counts["focus_markers"] == 1
+    assert viewer.focus_bodies["pr2"].position[:2] == pytest.approx(end["base"][:2])
+    # No selection: nothing highlighted, the robot back at its start.
+    viewer.show("kitchen-1", 0, events, plan)
+    assert viewer.counts["focus"] == -1 and viewer.counts["focus_markers"] == 0
+    assert viewer.focus_bodies == {}
+
+
+def test_a_selected_tabletop_node_moves_the_gripper(viewer: RunViewer) -> None:
+    tutorial = str(Path(__file__).resolve().parents[2] / "examples" / "tabletop2d")
+    sink = ListSink()
+    config = RunConfig(scene="tabletop-3", seed=1, planner="baseline", budget_s=60, domain=tutorial)
+    out = solve(config, sink=sink)
+    events = [event_to_dict(e) for e in sink.events]
+    nodes = _nodes(events)
+    ik = next(n for n in nodes.values() if n["stream"] == "inverse-kinematics" and n["success"])
+    viewer.show("tabletop-3", 1, events, out.plan_file(), domain=tutorial, focus=ik["node_id"])
+    gripper = viewer.focus_bodies["gripper"]
+    assert gripper.position[:2] == pytest.approx(ik["outputs"][0]["xy"])
+    # A failed node has no samples to highlight, and a node not in the tree at this step
+    # highlights nothing.
+    failed = next(n for n in nodes.values() if not n["success"])
+    viewer.show("tabletop-3", 1, events, None, domain=tutorial, focus=failed["node_id"])
+    assert viewer.counts["focus_markers"] == 0
+    early = events[: events.index(ik) - 1]
+    viewer.show("tabletop-3", 1, early, None, domain=tutorial, focus=ik["node_id"])
+    assert viewer.counts["focus_markers"] == 0 and viewer.focus_bodies == {}

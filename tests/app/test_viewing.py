@@ -28,8 +28,11 @@ class RecordingViewer:
         plan: dict[str, Any] | None,
         *,
         domain: str | None = None,
+        focus: int | None = None,
     ) -> None:
         self.calls.append(("show", ([e["seq"] for e in events], plan)))
+
+    picked = None
 
     def extend(self, events: Any) -> None:
         self.calls.append(("extend", [e["seq"] for e in events]))

@@ -40,7 +40,7 @@ from planner.sim.pr2_model import (
     VELOCITY_LIMITS,
 )
 from planner.sim.transforms import Pose, invert, multiply, planar_pose, wrap_angle
-from planner.view import Body, BodyState, Marker, QueryView, SceneView, Urdf, Vec3
+from planner.view import Body, BodyState, Focus, Marker, QueryView, SceneView, Urdf, Vec3
 
 T = TypeVar("T")
 Held = tuple[str, Grasp]  # a block in the hand and how it is held
@@ -165,6 +165,22 @@ class KitchenView:
         self, actions: Sequence[GroundAction], values: Mapping[str, Any], problem: Problem
     ) -> KitchenTimeline:
         return plan_timeline(actions, values, problem)
+
+    def focus(self, branch: Sequence[QueryView], problem: Problem) -> Focus:
+        """The robot at the last configuration the branch bound: an IK result, or where a
+        motion ends (at its start configuration before any)."""
+        conf: Conf | None = None
+        for query in branch:
+            for value in query.outputs:
+                if isinstance(value, Conf):
+                    conf = value
+                elif isinstance(value, Trajectory):
+                    conf = value.end
+        if conf is None:
+            return Focus()
+        base = planar_pose(*conf.base)
+        joints = robot_joints(conf.torso, conf.arm, FINGER_TRAVEL)
+        return Focus(bodies={ROBOT: BodyState(base[0], base[1], joints)})
 
 
 def _base_path(traj: Trajectory) -> tuple[Vec3, ...]:
