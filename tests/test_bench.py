@@ -4,7 +4,6 @@ on Ray, and a report with paired statistics."""
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import pytest
@@ -176,8 +175,9 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
 
 
 @pytest.mark.slow
-def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> None:
-    db = tmp_path / "b.db"
+def test_an_interrupted_benchmark_resumes_where_it_stopped(store_url: str) -> None:
+    """On SQLite and on PostgreSQL."""
+    db = store_url
     config = make_config(LINE, ["baseline"], trials=2, seed_start=3, budget_s=60.0)
     bench_id, first = run_bench(db, config, workers=1)
     assert len(first) == 2
@@ -190,7 +190,21 @@ def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> No
     with pytest.raises(BenchError, match="unknown benchmark"):
         run_bench(db, resume="nope")
     assert json.loads(json.dumps(summarize(db, bench_id)))["planners"]["baseline"]["trials"] == 2
-    assert os.path.exists(db)
+    with RunStore(db) as store:
+        assert store.count_runs(status="solved") == 3  # the forgotten trial's run, and its rerun
+
+
+@pytest.mark.parametrize("address", ["auto", "ray://10.0.0.5:10001", "10.0.0.5:6379"])
+def test_a_sqlite_store_with_a_ray_cluster_is_refused_before_any_trial(
+    tmp_path: Path, address: str
+) -> None:
+    """The cluster's other nodes cannot write to a file on this machine."""
+    db = tmp_path / "b.db"
+    config = make_config(LINE, ["baseline"], trials=2, seed_start=0, budget_s=60.0)
+    for store in (db, f"sqlite:///{db}"):
+        with pytest.raises(BenchError, match=r"SQLite file on this machine.*postgresql\+psycopg"):
+            run_bench(store, config, ray_address=address)
+    assert not db.exists()  # nothing recorded, no trial run
 
 
 @pytest.mark.slow

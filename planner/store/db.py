@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import sqlite3
 import threading
 import uuid
@@ -68,6 +69,7 @@ LIVE_STATUSES = RUN_STATUSES[:2]  # not finished yet
 BENCH_STATUSES = ("running", "done", "interrupted", "cancelled")
 MAX_INT = 2**63 - 1  # SQLite's largest integer: bigger numbers never reach a query
 INTERRUPTED = "the process running it stopped before it finished"
+_RUN_ID = re.compile(r"[0-9a-f]{32}")  # uuid4().hex
 
 WriteListener = Callable[[str, list[Event]], None]
 
@@ -417,17 +419,22 @@ class RunStore:
         *,
         status: str = "running",
         owner: str | None = None,
+        run_id: str | None = None,
     ) -> str:
-        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id.
-        ``owner`` (default: this process, :func:`~planner.store.owner.process_token`) is the
-        process that will finish it; :meth:`claim_run` hands it to another."""
+        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id,
+        ``run_id`` if given (32 hex digits: a benchmark names its trials' runs before they
+        start, to finish one whose process dies). ``owner`` (default: this process,
+        :func:`~planner.store.owner.process_token`) is the process that will finish it;
+        :meth:`claim_run` hands it to another."""
         if status not in LIVE_STATUSES:
             raise ValueError(f"a new run is queued or running, not {status!r}")
+        if run_id is not None and not _RUN_ID.fullmatch(run_id):
+            raise ValueError(f"a run id is 32 lowercase hex digits, got {run_id!r}")
         try:
             config_json = _dumps(config)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"run config is not JSON-friendly: {exc}") from exc
-        run_id = uuid.uuid4().hex
+        run_id = run_id or uuid.uuid4().hex
         with self.engine.begin() as conn:
             conn.execute(
                 insert(RunRow).values(

@@ -108,3 +108,19 @@ def test_a_store_newer_than_the_code_is_refused_by_name(store_url: str) -> None:
         conn.exec_driver_sql("UPDATE alembic_version SET version_num = '9999'")
     with pytest.raises(RuntimeError, match=r"schema revision '9999'.*newer version"):
         RunStore(store_url)
+
+
+def test_without_postgresql_the_suite_says_how_to_install_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The PostgreSQL tests fail, never skip, on a machine without it, and say what to run."""
+    from tests import postgres as server
+
+    monkeypatch.setattr(server.glob, "glob", lambda _pattern: [])
+    with (
+        pytest.raises(
+            server.PostgresMissingError, match=r"`make test`.*apt-get install postgresql"
+        ),
+        server.postgres_server(),
+    ):
+        pass
