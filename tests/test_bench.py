@@ -24,6 +24,7 @@ from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
 from planner.report import failure_kind, query_summary, render_html, summarize
 from planner.store import QueryOutcome, RunStore
+from tests.postgres import PostgresServer
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
 
@@ -284,3 +285,29 @@ def test_failures_count_together_by_kind_most_first() -> None:
         "error: RuntimeError",
         "no reason given",
     ]
+
+
+def test_tamp_bench_refuses_a_sqlite_file_for_a_ray_cluster(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "b.db"
+    argv = ["bench", "--scene", LINE, "--planners", "baseline", "--trials", "1", "--db", str(db)]
+    assert main([*argv, "--ray-address", "auto"]) == 2
+    error = capsys.readouterr().err
+    assert "is a SQLite file on this machine" in error and "--ray-address local" in error
+    assert not db.exists()
+
+
+@pytest.mark.slow
+def test_tamp_bench_and_report_take_a_postgresql_url(
+    postgres: PostgresServer, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    url = postgres.new_database("cli")
+    argv = ["bench", "--scene", LINE, "--planners", "baseline", "--trials", "1", "--db", url]
+    assert main([*argv, "--workers", "1"]) == 0
+    with RunStore(url) as store:
+        (bench,) = store.list_benches()
+        assert [t.status for t in store.bench_trials(bench.id)] == ["solved"]
+    capsys.readouterr()
+    assert main(["report", bench.id, "--db", url, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["planners"]["baseline"]["solved"] == 1
