@@ -13,12 +13,12 @@ from __future__ import annotations
 import functools
 import logging
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from alembic import command
-from alembic.config import Config
-from alembic.script import ScriptDirectory
 from sqlalchemy import Connection, Engine, create_engine, event, inspect, text
+
+if TYPE_CHECKING:
+    from alembic.config import Config
 
 log = logging.getLogger(__name__)
 
@@ -27,7 +27,14 @@ VERSION_TABLE = "alembic_version"  # Alembic's: one row, the store's revision
 _PG_LOCK = 0x7461_6D70_0031  # pg_advisory_xact_lock key: any constant all openers share
 
 
+# The newest revision, so that opening a current store imports nothing of Alembic (0.3 s in
+# every trial process); tests/store/test_migrations.py checks it is the scripts' head.
+HEAD = "0005"
+
+
 def _config() -> Config:
+    from alembic.config import Config
+
     config = Config()
     config.set_main_option("script_location", str(MIGRATIONS))
     return config
@@ -35,7 +42,10 @@ def _config() -> Config:
 
 @functools.cache
 def head() -> str:
-    """The newest revision of the schema."""
+    """The newest revision of the migration scripts (Alembic's view; :data:`HEAD` is what
+    opening a store checks against)."""
+    from alembic.script import ScriptDirectory
+
     revision = ScriptDirectory.from_config(_config()).get_current_head()
     if revision is None:
         raise RuntimeError(f"no schema revisions in {MIGRATIONS}: the package is broken")
@@ -55,6 +65,9 @@ class SchemaError(RuntimeError):
 
 def _upgrade_locked(conn: Connection, where: str) -> None:
     """Upgrade to the head on ``conn``, which holds the lock inside its transaction."""
+    from alembic import command
+    from alembic.script import ScriptDirectory
+
     current = revision_of(conn)
     if current == head():
         return  # another process upgraded it while this one waited for the lock
@@ -98,7 +111,7 @@ def _immediate_sqlite(engine: Engine) -> Engine:
 def upgrade(engine: Engine) -> None:
     """Bring the store behind ``engine`` to the newest schema (creating it when new)."""
     with engine.connect() as conn:
-        if revision_of(conn) == head():
+        if revision_of(conn) == HEAD:
             return
     where = engine.url.render_as_string(hide_password=True)
     backend = engine.url.get_backend_name()

@@ -18,7 +18,7 @@ from sqlalchemy import inspect, make_url
 from planner.events import NodeAdded, RunFailed, RunStarted
 from planner.store import RunStore
 from planner.store.db import Base
-from planner.store.schema import head, revision_of
+from planner.store.schema import HEAD, head, revision_of
 from tests.postgres import PostgresServer
 
 DATA = Path(__file__).with_name("data")
@@ -124,3 +124,8 @@ def test_without_postgresql_the_suite_says_how_to_install_it(
         server.postgres_server(),
     ):
         pass
+
+
+def test_the_revision_a_store_is_checked_against_is_the_newest_script() -> None:
+    """Opening a current store compares with HEAD without loading Alembic: it must not lag."""
+    assert head() == HEAD
