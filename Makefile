@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: test serve lint typecheck pytest clean bench-abstract
+.PHONY: test serve lint typecheck pytest postgres clean bench-abstract
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -29,7 +29,14 @@ $(CHROMIUM):
 	@echo "installing Debian's chromium for the browser tests (apt-get, needs root)"
 	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
 
-pytest: $(STAMP) $(CHROMIUM)
+# The store, API and benchmark tests run on SQLite and on a PostgreSQL server they start in a
+# temporary folder (tests/postgres.py): Debian's postgresql, installed as chromium is.
+postgres:
+	@ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1 || { \
+		echo "installing Debian's postgresql for the store tests (apt-get, needs root)" && \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq postgresql; }
+
+pytest: $(STAMP) $(CHROMIUM) postgres
 	$(BIN)/pytest -q
 
 serve: $(STAMP)

@@ -111,7 +111,7 @@ class Dashboard:
                     f"model {name!r} is for domain {fits.get(name)!r}, scene {scene!r} is "
                     f"{scene_info.domain!r} (models for it: {', '.join(fitting) or 'none'})",
                 )
-        db = Path(self.settings.database_url)
+        db = self.settings.database_url  # a path or a URL (Path would mangle a URL's //)
         config = RunConfig(
             scene=scene,
             seed=seed,
@@ -121,7 +121,7 @@ class Dashboard:
             model=str(model_path) if model_path is not None else None,
             domain=scene_info.domain_ref,
             # Learned with no model for the domain: priors from the runs stored here.
-            priors_db=str(db) if learned and model_path is None else None,
+            priors_db=db if learned and model_path is None else None,
         )
         data = asdict(config)
         if model_path is not None:

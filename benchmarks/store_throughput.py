@@ -77,8 +77,15 @@ def with_run_id(events: list[Event], run_id: str) -> list[Event]:
 
 def measure(events: list[Event], batch_size: int, directory: Path) -> float:
     """Seconds to push ``events`` through a StoreSink into a new SQLite file, close included."""
-    path = directory / f"runs-{batch_size}-{time.monotonic_ns()}.db"
-    with RunStore(path) as store:
+    return measure_into(
+        directory / f"runs-{batch_size}-{time.monotonic_ns()}.db", events, batch_size
+    )
+
+
+def measure_into(db: str | Path, events: list[Event], batch_size: int) -> float:
+    """Seconds to push ``events`` through a StoreSink into a new run of the store ``db``
+    (a path or a URL), close included."""
+    with RunStore(db) as store:
         run_id = store.create_run("kitchen-8", 0, "benchmark", {"batch_size": batch_size})
         ours = with_run_id(events, run_id)
         sink = StoreSink(store, run_id, batch_size=batch_size)

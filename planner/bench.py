@@ -19,7 +19,14 @@ from typing import Any
 
 from planner import __version__
 from planner.domains import LoadedDomain, problem_for_scene
-from planner.experiment import Trial, TrialResult, run_trials
+from planner.experiment import (
+    CRASHED,
+    StoreUnreachableError,
+    Trial,
+    TrialResult,
+    check_store_reachable,
+    run_trials,
+)
 from planner.planners import get_planner
 from planner.runs import ORDERS, PLANNERS, RunConfig
 from planner.store import BenchTrialRecord, RunStore
@@ -267,6 +274,10 @@ def run_bench(
     results of the trials run now."""
     if (config is None) == (resume is None):
         raise BenchError("give a benchmark configuration or --resume BENCH_ID, not both")
+    try:
+        check_store_reachable(db, ray_address)
+    except StoreUnreachableError as exc:
+        raise BenchError(str(exc)) from None
     with RunStore(db) as store:
         if resume is not None:
             try:
@@ -277,7 +288,10 @@ def run_bench(
                 BenchConfig.from_dict(previous.config), previous.config.get("model_sha256")
             )
             bench_id = resume
-            done = {(t.seed, t.planner) for t in store.bench_trials(bench_id)}
+            # A crashed trial (its process or node died) has no outcome: it runs again.
+            done = {
+                (t.seed, t.planner) for t in store.bench_trials(bench_id) if t.status != CRASHED
+            }
             check(config)  # the scene or the model file may have changed since
             code, started = code_revision(), previous.config.get("code")
             if started is not None and code != started:

@@ -106,6 +106,15 @@ DOMAIN_HELP = (
 )
 
 
+STORE_HELP = "run store: a SQLite path or a URL, postgresql+psycopg://... (default: user data)"
+
+
+def _store(text: str) -> Path | str:
+    """A ``--db``: a SQLite path, or a SQLAlchemy URL kept as written (a Path would fold its
+    ``//``)."""
+    return text if "://" in text else Path(text)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tamp", description="guided-tamp: task and motion planning that learns where to search"
@@ -148,9 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--budget", type=_positive, default=300.0, help="seconds (default 300)")
     pl.add_argument("--out", type=Path, help="write the bound plan here (JSON)")
     pl.add_argument("--json", action="store_true", help="machine-readable summary")
-    pl.add_argument(
-        "--db", type=Path, help="record the run in this SQLite file (default: user data)"
-    )
+    pl.add_argument("--db", type=_store, help="record the run in this store (default: user data)")
     pl.add_argument("--no-record", action="store_true", help="do not record the run")
 
     pl.add_argument(
@@ -179,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
     co.add_argument("--budget", type=_positive, default=300.0, help="seconds per trial")
     co.add_argument("--workers", type=_count, default=2, help="processes (default 2)")
-    co.add_argument("--db", type=Path, required=True, help="SQLite file to record into")
+    co.add_argument("--db", type=_store, required=True, help="store to record into")
     co.add_argument("--model", help="model file for --planner learned")
 
     be = sub.add_parser(
@@ -209,7 +216,7 @@ def build_parser() -> argparse.ArgumentParser:
         default="auto",
         help="stream order of every planner (see tamp plan --order; default auto)",
     )
-    be.add_argument("--db", type=Path, help="run store (default: user data)")
+    be.add_argument("--db", type=_store, help=STORE_HELP)
     be.add_argument("--ray-address", help="run the trials as Ray tasks: ADDRESS, auto, or local")
     be.add_argument("--resume", metavar="BENCH_ID", help="run the missing trials of a benchmark")
 
@@ -219,7 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Write an HTML report (plotly figures, tables) of a benchmark, or --json.",
     )
     rp.add_argument("bench_id", nargs="?", help="benchmark id (default: the latest)")
-    rp.add_argument("--db", type=Path, help="run store (default: user data)")
+    rp.add_argument("--db", type=_store, help=STORE_HELP)
     rp.add_argument("--out", type=Path, help="HTML file (default: the dashboard's reports dir)")
     rp.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -228,7 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="train per-stream cost models from recorded stream queries",
         description="Fit P_S, R_S, R_F, R_M per stream; prints validation AUC and errors.",
     )
-    tr.add_argument("--db", type=Path, action="append", required=True, help="run store(s)")
+    tr.add_argument("--db", type=_store, action="append", required=True, help="run store(s)")
     tr.add_argument(
         "--domain", help="train for this domain (name or folder; default: the one in the stores)"
     )
@@ -587,7 +594,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     from planner.store import RunStore, default_db_path
 
     db = args.db or default_db_path()
-    if not Path(db).is_file():
+    if "://" not in str(db) and not Path(db).is_file():  # a URL names a database server
         raise ValueError(f"no run store at {db}")
     bench_id = args.bench_id
     if bench_id is None:

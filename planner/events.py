@@ -557,11 +557,17 @@ class BatchingSink:
 
     ``emit`` only appends to a buffer; the buffer is written when it holds ``batch_size``
     events, when the run's last event (finished / failed / cancelled) arrives, when its oldest
-    event is ``flush_interval_s`` old (checked on emit and by a background timer, so a long
-    stream query does not hold events back), and on ``close``. A failed write keeps the batch
-    for the next attempt: events are never dropped silently. Subclasses check each event in
+    event is ``flush_interval_s`` old, and on ``close``. With a ``flush_interval_s`` a
+    background writer thread writes full and stale batches (woken by ``emit``, and every half
+    interval, so a long stream query does not hold events back): the planner's thread never
+    waits for a database's commit, only for the run's last event, at ``close``, and when the
+    writer falls behind by ``BACKLOG`` batches (then ``emit`` writes, so the buffer stays
+    bounded). Without one, ``emit`` writes them itself. A failed write keeps the batch for the
+    next attempt: events are never dropped silently. Subclasses check each event in
     :meth:`_accept` (called under the buffer lock).
     """
+
+    BACKLOG = 4  # batches buffered before emit writes itself
 
     def __init__(
         self,
@@ -584,6 +590,7 @@ class BatchingSink:
         self._write_lock = threading.Lock()  # one batch at a time, in seq order
         self._closed = False
         self._stop = threading.Event()
+        self._wake = threading.Event()  # a full or stale batch for the writer thread
         self._timer: threading.Thread | None = None
         if flush_interval_s is not None:
             self._timer = threading.Thread(target=self._flush_periodically, name=name, daemon=True)
@@ -601,13 +608,16 @@ class BatchingSink:
             now = time.perf_counter()
             if self._oldest is None:
                 self._oldest = now
+            ready = len(self._buffer) >= self.batch_size or self._stale(now)
             due = (
-                len(self._buffer) >= self.batch_size
-                or event.type in TERMINAL_TYPES
-                or self._stale(now)
+                event.type in TERMINAL_TYPES
+                or len(self._buffer) >= self.BACKLOG * self.batch_size
+                or (ready and self._timer is None)
             )
         if due:
             self.flush()
+        elif ready:
+            self._wake.set()
 
     def flush(self) -> None:
         """Write everything buffered now."""
@@ -630,6 +640,7 @@ class BatchingSink:
         with self._lock:
             self._closed = True
         self._stop.set()
+        self._wake.set()
         if self._timer is not None and self._timer is not threading.current_thread():
             self._timer.join()
         self.flush()
@@ -642,15 +653,21 @@ class BatchingSink:
         )
 
     def _flush_periodically(self) -> None:
+        """The writer thread: full batches when emit wakes it, stale ones every half interval."""
         assert self.flush_interval_s is not None
-        while not self._stop.wait(self.flush_interval_s / 2):
+        while not self._stop.is_set():
+            self._wake.wait(self.flush_interval_s / 2)
+            self._wake.clear()
+            if self._stop.is_set():
+                return  # close writes what is left
             with self._lock:
-                stale = self._stale(time.perf_counter())
-            if stale:
+                ready = len(self._buffer) >= self.batch_size or self._stale(time.perf_counter())
+            if ready:
                 try:
                     self.flush()
                 except Exception:
                     log.exception("%r: writing events failed; will retry", self)
+                    self._stop.wait(self.flush_interval_s / 2)  # not at once: it just failed
 
 
 class Emitter:

@@ -2,8 +2,9 @@
 
 Every trial runs in a fresh worker process (OMPL takes one seed per process, so a trial is
 reproducible from its seed) and writes its events and stream queries into one store. A trial
-that crashes (or whose process dies) is recorded as failed with its error, and the batch goes
-on.
+whose planner raises is failed with its error; one whose process or Ray node dies is
+``crashed`` with the reason (its run, if it had begun, is finished as failed with it), and the
+batch goes on: ``tamp bench --resume`` runs crashed trials again.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import statistics
 import sys
 import time
 import traceback
+import uuid
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -41,7 +43,7 @@ class Trial:
 class TrialResult:
     trial: Trial
     run_id: str | None
-    status: str  # solved, timeout, failed
+    status: str  # solved, timeout, failed; crashed: its process or node died (CRASHED)
     valid: bool | None
     planning_s: float | None
     execution_s: float | None
@@ -57,8 +59,36 @@ class TrialResult:
         return out
 
 
-def run_trial(trial: Trial, db: str) -> TrialResult:
-    """One recorded run (in the calling process); crashes become failed results."""
+CRASHED = "crashed"  # a trial whose process or Ray node died: not an outcome, run it again
+LOCAL_RAY = "local"  # --ray-address for a Ray started in this process, on this machine
+
+
+class StoreUnreachableError(ValueError):
+    """Trials would run where the store cannot be reached; the message says what to give."""
+
+
+def check_store_reachable(db: str | Path, ray_address: str | None) -> None:
+    """A SQLite store is a file on this machine: trials on a Ray cluster's other nodes could not
+    write to it (each would find, or create, a file of its own there). Refused before any trial
+    runs, naming what to give instead."""
+    if ray_address is None or ray_address == LOCAL_RAY:
+        return
+    from sqlalchemy import make_url
+
+    text = str(db)
+    backend = make_url(text).get_backend_name() if "://" in text else "sqlite"
+    if backend == "sqlite":
+        raise StoreUnreachableError(
+            f"the store {text} is a SQLite file on this machine, which the nodes of the Ray "
+            f"cluster at {ray_address!r} cannot write to: give --db a database every node "
+            "reaches (postgresql+psycopg://USER@HOST/DB), or --ray-address local to run the "
+            "trials on this machine"
+        )
+
+
+def run_trial(trial: Trial, db: str, run_id: str | None = None) -> TrialResult:
+    """One recorded run (in the calling process), stored under ``run_id`` (default: a new id);
+    a planner that raises makes a failed result."""
     from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
 
@@ -75,7 +105,7 @@ def run_trial(trial: Trial, db: str) -> TrialResult:
         priors_db=db if trial.model is None else None,
     )
     preload_libraries(config)
-    run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config))
+    run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config), run_id=run_id)
     try:
         recorded = record_run(config, store, run_id)
     except Exception as exc:  # a crashed trial is data, not the end of the batch
@@ -117,14 +147,15 @@ def run_trials(
     Locally each trial gets a fresh spawned process (at most ``workers`` at once); with
     ``ray_address`` (an address, ``auto``, or ``local`` for a Ray started here with
     ``workers`` CPUs) each trial is a Ray task in a fresh worker process. A trial whose
-    process dies is a failed result with the exit code; ``on_result`` sees every result as it
-    comes. On a multi-machine Ray cluster ``db`` must be a database every node reaches
-    (a PostgreSQL URL or a shared file system).
+    process or node dies is a ``crashed`` result with the reason; ``on_result`` sees every
+    result as it comes. On a Ray cluster (any address but ``local``) ``db`` must be a database
+    every node reaches, a PostgreSQL URL: a SQLite path is refused before any trial runs.
     """
     from planner.store import RunStore
 
     if workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
+    check_store_reachable(db, ray_address)
     RunStore(db).close()  # create the schema once, before workers race to it
     say = progress or (lambda _m: None)
     results: list[TrialResult] = []
@@ -154,18 +185,29 @@ def run_trials(
     return results
 
 
-def _crashed(trial: Trial, error: str) -> TrialResult:
-    log.warning("trial %s seed %d (%s): %s", trial.scene, trial.seed, trial.planner, error)
-    return TrialResult(trial, None, "failed", None, None, None, None, 0, 0.0, error)
+def _crashed(trial: Trial, db: str, run_id: str, reason: str) -> TrialResult:
+    """The result of a trial whose process or node died; its run, if it had begun, is finished
+    as failed with the reason (nobody else would: its process is gone)."""
+    from planner.store import RunStore
+
+    log.warning("trial %s seed %d (%s) crashed: %s", trial.scene, trial.seed, trial.planner, reason)
+    recorded: str | None = run_id
+    try:
+        with RunStore(db) as store:
+            store.settle_run(run_id, "failed", f"crashed: {reason}")
+    except KeyError:
+        recorded = None  # it died before it recorded its run
+    return TrialResult(trial, recorded, CRASHED, None, None, None, None, 0, 0.0, reason)
 
 
-def _trial_process(trial: Trial, db: str, conn: Connection) -> None:
+def _trial_process(trial: Trial, db: str, run_id: str, conn: Connection) -> None:
     """Entry point of a local trial process: the result goes back through ``conn``."""
     logging.basicConfig(level=logging.WARNING)
+    result: TrialResult | str
     try:
-        result = run_trial(trial, db)
+        result = run_trial(trial, db, run_id)
     except BaseException as exc:  # even Ctrl-C: the parent decides what happens next
-        result = _crashed(trial, f"{type(exc).__name__}: {exc}")
+        result = f"{type(exc).__name__}: {exc}"
     conn.send(result)
     conn.close()
 
@@ -175,35 +217,34 @@ def _run_local(
 ) -> None:
     ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: OMPL seeds per process
     pending = deque(trials)
-    running: dict[Connection, tuple[BaseProcess, Trial]] = {}
+    running: dict[Connection, tuple[BaseProcess, Trial, str]] = {}
     try:
         while pending or running:
             while pending and len(running) < workers:
                 trial = pending.popleft()
+                run_id = uuid.uuid4().hex
                 receive, send = ctx.Pipe(duplex=False)
                 proc: BaseProcess = ctx.Process(
-                    target=_trial_process, args=(trial, db, send), daemon=True
+                    target=_trial_process, args=(trial, db, run_id, send), daemon=True
                 )
                 proc.start()
                 send.close()
-                running[receive] = (proc, trial)
+                running[receive] = (proc, trial, run_id)
             for conn in wait(list(running), timeout=1.0):
                 assert isinstance(conn, Connection)
-                process, trial = running.pop(conn)
+                process, trial, run_id = running.pop(conn)
                 try:
-                    result = conn.recv()
+                    got: TrialResult | str = conn.recv()
                 except (EOFError, OSError):
                     process.join(timeout=5.0)
-                    result = _crashed(
-                        trial, f"the trial's process died (exit code {process.exitcode})"
-                    )
+                    got = f"the trial's process died (exit code {process.exitcode})"
                 conn.close()
                 process.join(timeout=5.0)
-                done(result)
+                done(got if isinstance(got, TrialResult) else _crashed(trial, db, run_id, got))
     finally:
-        for left, _ in running.values():  # interrupted: stop what still runs
+        for left, _, _ in running.values():  # interrupted: stop what still runs
             left.terminate()
-        for left, _ in running.values():
+        for left, _, _ in running.values():
             left.join(timeout=5.0)
 
 
@@ -219,7 +260,7 @@ def _run_ray(
     started_here = not ray.is_initialized()
     if started_here:
         try:
-            if address == "local":
+            if address == LOCAL_RAY:
                 # Ray runs its workers at nice 15; on a machine with other work the trials
                 # then starve (a 1 s top-k call took 86 s beside a running benchmark), and
                 # they would not be timed like the process pool's trials, which run at 0.
@@ -234,20 +275,37 @@ def _run_ray(
             ) from exc
     try:
         # A fresh worker process per trial (max_calls=1), no silent retries: a trial runs once.
-        remote = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(run_trial)
-        refs = {remote.remote(t, db): t for t in trials}
+        # The trials write to the store themselves: a database every node reaches
+        # (check_store_reachable), so what a node records survives the node.
+        remote = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(_ray_trial)
+        refs: dict[Any, tuple[Trial, str]] = {}
+        for t in trials:
+            run_id = uuid.uuid4().hex
+            refs[remote.remote(t, db, run_id)] = (t, run_id)
         while refs:
             ready, _ = ray.wait(list(refs), num_returns=1)
             for ref in ready:
-                trial = refs.pop(ref)
+                trial, run_id = refs.pop(ref)
                 try:
                     result = ray.get(ref)
-                except Exception as exc:
-                    result = _crashed(trial, f"Ray task failed: {type(exc).__name__}: {exc}")
+                except Exception as exc:  # its worker or node died: no result came back
+                    reason = f"the Ray task failed: {type(exc).__name__}: {_first_line(exc)}"
+                    result = _crashed(trial, db, run_id, reason)
                 done(result)
     finally:
         if started_here:
             ray.shutdown()
+
+
+def _ray_trial(trial: Trial, db: str, run_id: str) -> TrialResult:
+    """A Ray task: :func:`run_trial` in a Ray worker."""
+    return run_trial(trial, db, run_id)
+
+
+def _first_line(exc: BaseException) -> str:
+    """Ray's errors run to many lines (tracebacks, advice); the first says what happened."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return lines[0] if lines else "no message"
 
 
 def stderr_progress(message: str) -> None:

@@ -214,7 +214,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             "trials": len(ts),
             "solved": len(solved),
             "solved_fraction": len(solved) / len(ts) if ts else None,
-            "failed": sum(1 for t in ts if t.status == "failed"),
+            "failed": sum(1 for t in ts if t.status in ("failed", "crashed")),
             "invalid_plans": sum(1 for t in ts if t.valid is False),
             **{f"{m}_s": _stats([x[m] for x in times]) for m in MEASURES},  # over solved trials
             "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),

@@ -1,16 +1,21 @@
 """Shared fixtures: the two shipped domains, parsed once; generated meshes cached in a folder of
-the test session's own (subprocesses such as ``tamp serve`` inherit it), not the user's."""
+the test session's own (subprocesses such as ``tamp serve`` inherit it), not the user's; a
+PostgreSQL server of the session's own, and a new store on each backend (``store_url``)."""
 
 from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
 from planner.domains import LoadedDomain, get_domain, problem_for_scene
 from planner.pddl import Problem
 from planner.sim.meshes import CACHE_ENV
+from tests.postgres import PostgresMissingError, PostgresServer, postgres_server
+
+BACKENDS = ("sqlite", "postgresql")  # every store test runs on both
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -37,3 +42,23 @@ def kitchen() -> LoadedDomain:
 @pytest.fixture(scope="session")
 def line_problem() -> Problem:
     return problem_for_scene("line-2")[1]
+
+
+@pytest.fixture(scope="session")
+def postgres() -> Iterator[PostgresServer]:
+    """A PostgreSQL server of the session's own (tests/postgres.py); never skipped: without
+    PostgreSQL installed the tests that need it fail and say how to install it."""
+    try:
+        with postgres_server() as server:
+            yield server
+    except PostgresMissingError as exc:
+        pytest.fail(str(exc), pytrace=False)
+
+
+@pytest.fixture(params=BACKENDS)
+def store_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
+    """A new, empty store on each backend: a SQLite file, then a PostgreSQL database."""
+    if request.param == "sqlite":
+        return str(tmp_path / "data" / "runs.db")
+    server: PostgresServer = request.getfixturevalue("postgres")
+    return server.new_database()

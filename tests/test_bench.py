@@ -4,7 +4,6 @@ on Ray, and a report with paired statistics."""
 from __future__ import annotations
 
 import json
-import os
 import re
 from pathlib import Path
 
@@ -26,6 +25,7 @@ from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
 from planner.report import failure_kind, query_summary, render_html, summarize, table_markdown
 from planner.store import QueryOutcome, RunStore
+from tests.postgres import PostgresServer
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
 
@@ -177,8 +177,9 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
 
 
 @pytest.mark.slow
-def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> None:
-    db = tmp_path / "b.db"
+def test_an_interrupted_benchmark_resumes_where_it_stopped(store_url: str) -> None:
+    """On SQLite and on PostgreSQL."""
+    db = store_url
     config = make_config(LINE, ["baseline"], trials=2, seed_start=3, budget_s=60.0)
     bench_id, first = run_bench(db, config, workers=1)
     assert len(first) == 2
@@ -191,7 +192,21 @@ def test_an_interrupted_benchmark_resumes_where_it_stopped(tmp_path: Path) -> No
     with pytest.raises(BenchError, match="unknown benchmark"):
         run_bench(db, resume="nope")
     assert json.loads(json.dumps(summarize(db, bench_id)))["planners"]["baseline"]["trials"] == 2
-    assert os.path.exists(db)
+    with RunStore(db) as store:
+        assert store.count_runs(status="solved") == 3  # the forgotten trial's run, and its rerun
+
+
+@pytest.mark.parametrize("address", ["auto", "ray://10.0.0.5:10001", "10.0.0.5:6379"])
+def test_a_sqlite_store_with_a_ray_cluster_is_refused_before_any_trial(
+    tmp_path: Path, address: str
+) -> None:
+    """The cluster's other nodes cannot write to a file on this machine."""
+    db = tmp_path / "b.db"
+    config = make_config(LINE, ["baseline"], trials=2, seed_start=0, budget_s=60.0)
+    for store in (db, f"sqlite:///{db}"):
+        with pytest.raises(BenchError, match=r"SQLite file on this machine.*postgresql\+psycopg"):
+            run_bench(store, config, ray_address=address)
+    assert not db.exists()  # nothing recorded, no trial run
 
 
 @pytest.mark.slow
@@ -298,3 +313,29 @@ def test_a_benchmark_of_variants_reports_each_against_learned(tmp_path: Path) ->
     for cell in (cells[2], cells[3], cells[5]):
         assert re.fullmatch(change, cell), cell
     assert cells[4] == "-" or re.fullmatch(change, cells[4]), cells[4]
+
+
+def test_tamp_bench_refuses_a_sqlite_file_for_a_ray_cluster(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "b.db"
+    argv = ["bench", "--scene", LINE, "--planners", "baseline", "--trials", "1", "--db", str(db)]
+    assert main([*argv, "--ray-address", "auto"]) == 2
+    error = capsys.readouterr().err
+    assert "is a SQLite file on this machine" in error and "--ray-address local" in error
+    assert not db.exists()
+
+
+@pytest.mark.slow
+def test_tamp_bench_and_report_take_a_postgresql_url(
+    postgres: PostgresServer, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    url = postgres.new_database("cli")
+    argv = ["bench", "--scene", LINE, "--planners", "baseline", "--trials", "1", "--db", url]
+    assert main([*argv, "--workers", "1"]) == 0
+    with RunStore(url) as store:
+        (bench,) = store.list_benches()
+        assert [t.status for t in store.bench_trials(bench.id)] == ["solved"]
+    capsys.readouterr()
+    assert main(["report", bench.id, "--db", url, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["planners"]["baseline"]["solved"] == 1

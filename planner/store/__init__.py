@@ -1,4 +1,5 @@
-"""The record of runs: every event and every stream query, in SQLite through SQLAlchemy."""
+"""The record of runs: every event and every stream query, in SQLite or PostgreSQL through
+SQLAlchemy, its schema migrated by Alembic when a store opens (``schema``)."""
 
 from planner.store.db import (
     BENCH_STATUSES,
@@ -16,6 +17,7 @@ from planner.store.db import (
     default_db_path,
 )
 from planner.store.owner import is_alive, process_token
+from planner.store.schema import SchemaError
 
 __all__ = [
     "BENCH_STATUSES",
@@ -29,6 +31,7 @@ __all__ = [
     "QueryRecord",
     "RunRecord",
     "RunStore",
+    "SchemaError",
     "StoreSink",
     "default_db_path",
     "is_alive",

@@ -11,23 +11,26 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import sqlite3
 import threading
-import time
 import uuid
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from sqlalchemy import (
     URL,
+    BigInteger,
     Connection,
     DateTime,
+    Double,
     Engine,
     ForeignKey,
     Index,
+    Integer,
     String,
     Text,
     create_engine,
@@ -35,13 +38,10 @@ from sqlalchemy import (
     event,
     func,
     insert,
-    inspect,
     make_url,
     select,
-    text,
     update,
 )
-from sqlalchemy.exc import DBAPIError, OperationalError
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 from sqlalchemy.pool import StaticPool
 
@@ -56,6 +56,7 @@ from planner.events import (
     event_from_dict,
     event_payload,
 )
+from planner.store import schema
 from planner.store.owner import is_alive, process_token
 
 log = logging.getLogger(__name__)
@@ -68,6 +69,7 @@ LIVE_STATUSES = RUN_STATUSES[:2]  # not finished yet
 BENCH_STATUSES = ("running", "done", "interrupted", "cancelled")
 MAX_INT = 2**63 - 1  # SQLite's largest integer: bigger numbers never reach a query
 INTERRUPTED = "the process running it stopped before it finished"
+_RUN_ID = re.compile(r"[0-9a-f]{32}")  # uuid4().hex
 
 WriteListener = Callable[[str, list[Event]], None]
 
@@ -83,8 +85,15 @@ def _utc(value: datetime) -> datetime:
 # --- schema ----------------------------------------------------------------------------------
 
 
+# 64 bits everywhere: SQLite's INTEGER is, PostgreSQL's BIGINT (migration 0005).
+Int64 = BigInteger().with_variant(Integer(), "sqlite")
+
+
 class Base(DeclarativeBase):
-    pass
+    """The tables as the code reads them; their history is planner/store/migrations."""
+
+    # floats as SQLAlchemy 2.1 maps them (2.0 mapped them to Float), whichever is installed
+    type_annotation_map: ClassVar[dict[Any, Any]] = {float: Double}
 
 
 class RunRow(Base):
@@ -93,7 +102,7 @@ class RunRow(Base):
 
     id: Mapped[str] = mapped_column(String(32), primary_key=True)  # uuid4 hex
     scene: Mapped[str] = mapped_column(Text)  # a scene name or a path to a scene file
-    seed: Mapped[int]
+    seed: Mapped[int] = mapped_column(Int64)
     planner: Mapped[str] = mapped_column(String(100))
     config: Mapped[str] = mapped_column(Text)  # JSON
     status: Mapped[str] = mapped_column(String(16))  # one of RUN_STATUSES
@@ -102,7 +111,7 @@ class RunRow(Base):
     planning_s: Mapped[float | None]
     execution_s: Mapped[float | None]
     oracle_s: Mapped[float | None]
-    queries: Mapped[int] = mapped_column(default=0)
+    queries: Mapped[int] = mapped_column(Int64, default=0)
     message: Mapped[str] = mapped_column(Text, default="")
     plan: Mapped[str | None] = mapped_column(Text)  # JSON of the bound plan file when solved
     owner: Mapped[str | None] = mapped_column(Text)  # host:pid:start of the process running it
@@ -114,7 +123,7 @@ class EventRow(Base):
     __tablename__ = "events"
 
     run_id: Mapped[str] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True)
-    seq: Mapped[int] = mapped_column(primary_key=True)
+    seq: Mapped[int] = mapped_column(Int64, primary_key=True)
     t: Mapped[float]
     type: Mapped[str] = mapped_column(String(32))
     payload: Mapped[str] = mapped_column(Text)  # JSON of the fields other than run_id, seq, t
@@ -129,8 +138,8 @@ class QueryRow(Base):
 
     id: Mapped[int] = mapped_column(primary_key=True, autoincrement=True)
     run_id: Mapped[str] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
-    node_id: Mapped[int]
-    seq: Mapped[int]  # the StreamQueried event's seq
+    node_id: Mapped[int] = mapped_column(Int64)
+    seq: Mapped[int] = mapped_column(Int64)  # the StreamQueried event's seq
     stream: Mapped[str] = mapped_column(String(200))
     input_names: Mapped[str] = mapped_column(Text)  # JSON list
     inputs: Mapped[str] = mapped_column(Text)  # JSON list of encoded values
@@ -164,7 +173,7 @@ class BenchTrialRow(Base):
     bench_id: Mapped[str] = mapped_column(
         ForeignKey("benchmarks.id", ondelete="CASCADE"), primary_key=True
     )
-    seed: Mapped[int] = mapped_column(primary_key=True)
+    seed: Mapped[int] = mapped_column(Int64, primary_key=True)
     planner: Mapped[str] = mapped_column(String(100), primary_key=True)
     run_id: Mapped[str | None] = mapped_column(String(32))
     status: Mapped[str] = mapped_column(String(16))  # solved, timeout, failed
@@ -172,7 +181,7 @@ class BenchTrialRow(Base):
     planning_s: Mapped[float | None]
     execution_s: Mapped[float | None]
     oracle_s: Mapped[float | None]
-    queries: Mapped[int] = mapped_column(default=0)
+    queries: Mapped[int] = mapped_column(Int64, default=0)
     error: Mapped[str | None] = mapped_column(Text)
     finished_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
 
@@ -341,60 +350,6 @@ def _engine_for(url_or_path: str | Path | URL) -> Engine:
     return engine
 
 
-def _create_tables(engine: Engine, attempts: int = 10) -> None:
-    """Create the tables that are missing. Processes that open a new store at once race
-    between checking for a table and creating it (SQLite: "table runs already exists", or
-    "database is locked" when a reader's lock cannot be upgraded, which SQLite reports at once
-    rather than wait; two trials started together lost one of them): the loser checks again."""
-    for attempt in range(attempts):
-        try:
-            Base.metadata.create_all(engine)
-            return
-        except OperationalError as exc:
-            racing = "already exists" in str(exc) or "database is locked" in str(exc)
-            if not racing or attempt == attempts - 1:
-                raise
-            log.debug("run store: another process is creating the tables; checking again")
-            time.sleep(0.05 * (attempt + 1))
-
-
-# Columns added after stores were first written, as (table, column, SQL type): a store from an
-# older version gets them (NULL in its old rows) when it is opened.
-_ADDED_COLUMNS = (
-    ("stream_queries", "reason", "TEXT"),
-    ("runs", "owner", "TEXT"),
-    ("benchmarks", "owner", "TEXT"),
-)
-# Indices added the same way (CREATE INDEX IF NOT EXISTS), as (name, table, columns).
-_ADDED_INDICES = (("ix_runs_created_at", "runs", "created_at"),)
-
-
-def _add_new_columns(engine: Engine, attempts: int = 10) -> None:
-    """Bring an older store's tables up to date. Processes opening it at once may race to add a
-    column; the loser finds it there."""
-    for table, column, sql_type in _ADDED_COLUMNS:
-        for attempt in range(attempts):
-            if column in {c["name"] for c in inspect(engine).get_columns(table)}:
-                break
-            try:
-                with engine.begin() as conn:
-                    conn.execute(text(f"ALTER TABLE {table} ADD COLUMN {column} {sql_type}"))
-                log.info(
-                    "run store: added column %s.%s to a store from an older version", table, column
-                )
-                break
-            except DBAPIError:
-                if attempt == attempts - 1:
-                    raise
-                log.debug(
-                    "run store: adding %s.%s raced another process; checking again", table, column
-                )
-                time.sleep(0.05 * (attempt + 1))
-    for name, table, columns in _ADDED_INDICES:
-        with engine.begin() as conn:
-            conn.execute(text(f"CREATE INDEX IF NOT EXISTS {name} ON {table} ({columns})"))
-
-
 def _bounded(name: str, value: int, low: int = 0) -> int:
     """``value`` if it is an integer SQLite can hold and at least ``low``; else ValueError."""
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= MAX_INT:
@@ -411,8 +366,7 @@ class RunStore:
 
     def __init__(self, url_or_path: str | Path | URL) -> None:
         self.engine = _engine_for(url_or_path)
-        _create_tables(self.engine)
-        _add_new_columns(self.engine)
+        schema.upgrade(self.engine)
         self._write_listeners: list[WriteListener] = []
         self._version_lock = threading.Lock()
         self._version_conn: sqlite3.Connection | None = None
@@ -465,17 +419,22 @@ class RunStore:
         *,
         status: str = "running",
         owner: str | None = None,
+        run_id: str | None = None,
     ) -> str:
-        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id.
-        ``owner`` (default: this process, :func:`~planner.store.owner.process_token`) is the
-        process that will finish it; :meth:`claim_run` hands it to another."""
+        """Record a new run as ``running`` (or ``queued``, to be started later); returns its id,
+        ``run_id`` if given (32 hex digits: a benchmark names its trials' runs before they
+        start, to finish one whose process dies). ``owner`` (default: this process,
+        :func:`~planner.store.owner.process_token`) is the process that will finish it;
+        :meth:`claim_run` hands it to another."""
         if status not in LIVE_STATUSES:
             raise ValueError(f"a new run is queued or running, not {status!r}")
+        if run_id is not None and not _RUN_ID.fullmatch(run_id):
+            raise ValueError(f"a run id is 32 lowercase hex digits, got {run_id!r}")
         try:
             config_json = _dumps(config)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"run config is not JSON-friendly: {exc}") from exc
-        run_id = uuid.uuid4().hex
+        run_id = run_id or uuid.uuid4().hex
         with self.engine.begin() as conn:
             conn.execute(
                 insert(RunRow).values(

@@ -1,4 +1,5 @@
-"""The REST API and the websocket, in process (TestClient), with real worker processes."""
+"""The REST API and the websocket, in process (TestClient), with real worker processes, on a
+SQLite store and on a PostgreSQL one (``store_url``, tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -17,9 +18,9 @@ from app.main import create_app
 from app.settings import Settings
 
 
-def _settings(tmp_path: Path, **overrides: Any) -> Settings:
+def _settings(tmp_path: Path, store_url: str, **overrides: Any) -> Settings:
     values: dict[str, Any] = {
-        "database_url": str(tmp_path / "runs.db"),
+        "database_url": store_url,
         "viewer": False,
         "max_running": 1,
         "max_queued": 5,
@@ -39,8 +40,8 @@ def _client(settings: Settings) -> TestClient:
 
 
 @pytest.fixture()
-def client(tmp_path: Path) -> Iterator[TestClient]:
-    with _client(_settings(tmp_path)) as c:
+def client(tmp_path: Path, store_url: str) -> Iterator[TestClient]:
+    with _client(_settings(tmp_path, store_url)) as c:
         yield c
 
 
@@ -154,8 +155,8 @@ def test_launch_stream_and_read_a_run(client: TestClient) -> None:
 
 
 @pytest.mark.slow
-def test_queue_cancel_and_429(tmp_path: Path) -> None:
-    settings = _settings(tmp_path, max_running=1, max_queued=1, cancel_grace_s=2.0)
+def test_queue_cancel_and_429(tmp_path: Path, store_url: str) -> None:
+    settings = _settings(tmp_path, store_url, max_running=1, max_queued=1, cancel_grace_s=2.0)
     with _client(settings) as client:
         body = {"scene": "kitchen-3", "budget_s": 120}
         first = client.post("/api/runs", json=body).json()
@@ -183,19 +184,19 @@ def test_queue_cancel_and_429(tmp_path: Path) -> None:
         assert client.get("/api/health").json()["running"] == 0
 
 
-def test_runs_whose_process_died_are_marked_interrupted(tmp_path: Path) -> None:
+def test_runs_whose_process_died_are_marked_interrupted(tmp_path: Path, store_url: str) -> None:
     recorder = (  # a process that records the start of a run, then dies
         "import sys; from planner.store import RunStore; "
         "print(RunStore(sys.argv[1]).create_run('line-2', 0, 'baseline', {}))"
     )
     done = subprocess.run(
-        [sys.executable, "-c", recorder, str(tmp_path / "runs.db")],
+        [sys.executable, "-c", recorder, store_url],
         capture_output=True,
         text=True,
         check=True,
     )
     run_id = done.stdout.strip()
-    with _client(_settings(tmp_path)) as client:
+    with _client(_settings(tmp_path, store_url)) as client:
         run = client.get(f"/api/runs/{run_id}").json()
         assert run["status"] == "interrupted" and "stopped" in run["message"]
         (closing,) = client.get(f"/api/runs/{run_id}/events").json()["events"]

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from sqlalchemy import inspect
 
 from planner.events import (
     Emitter,
@@ -24,17 +25,25 @@ from planner.events import (
     StreamQueried,
 )
 from planner.store import RunStore, StoreSink, default_db_path, is_alive, process_token
+from tests.conftest import BACKENDS
 
 CONFIG: dict[str, Any] = {"k": 10, "budget_s": 60.0, "policy": {"c": 1.4}}
 
 
 @pytest.fixture
-def db(tmp_path: Path) -> Path:
+def db(store_url: str) -> str:
+    """A new store, on SQLite and on PostgreSQL (tests/conftest.py)."""
+    return store_url
+
+
+@pytest.fixture
+def sqlite_db(tmp_path: Path) -> Path:
+    """For what only SQLite has: its file, its journal, its data_version."""
     return tmp_path / "data" / "runs.db"
 
 
 @pytest.fixture
-def store(db: Path) -> Iterator[RunStore]:
+def store(db: str) -> Iterator[RunStore]:
     with RunStore(db) as store:
         yield store
 
@@ -320,7 +329,7 @@ def test_integers_sqlite_cannot_hold_are_refused(store: RunStore) -> None:
     assert store.events(run_id, after=2**63 - 1) == []
 
 
-def test_write_listeners_hear_of_events_once_they_are_stored(db: Path, store: RunStore) -> None:
+def test_write_listeners_hear_of_events_once_they_are_stored(db: str, store: RunStore) -> None:
     run_id = store.create_run("line-2", 0, "baseline", {})
     heard: list[tuple[str, list[int], int]] = []
 
@@ -340,7 +349,9 @@ def test_write_listeners_hear_of_events_once_they_are_stored(db: Path, store: Ru
     assert [e.seq for e in store.events(run_id)] == list(range(7))  # none written twice
 
 
-def test_data_version_changes_when_anyone_commits(db: Path, store: RunStore) -> None:
+def test_data_version_changes_when_anyone_commits(sqlite_db: Path) -> None:
+    db = sqlite_db
+    store = RunStore(db)
     first = store.data_version()
     assert first is not None and store.data_version() == first
     run_id = store.create_run("line-2", 0, "baseline", {})
@@ -349,11 +360,12 @@ def test_data_version_changes_when_anyone_commits(db: Path, store: RunStore) -> 
     with RunStore(db) as other:
         other.finish_run(run_id, "solved")
     assert store.data_version() != second
+    store.close()
     with RunStore("sqlite://") as memory:
         assert memory.data_version() is None
 
 
-def test_close_flushes_everything_buffered(db: Path) -> None:
+def test_close_flushes_everything_buffered(db: str) -> None:
     store = RunStore(db)
     run_id = store.create_run("line-2", 3, "learned", CONFIG)
     sink = StoreSink(store, run_id, batch_size=10_000, flush_interval_s=60.0)
@@ -421,7 +433,7 @@ def _emit_search_rest(emitter: Emitter) -> None:
         emitter.emit(NodeVisited, node_id=1, visits=i + 2, value=0.0)
 
 
-def test_second_store_on_the_same_file_sees_the_data(db: Path, store: RunStore) -> None:
+def test_second_store_on_the_same_database_sees_the_data(db: str, store: RunStore) -> None:
     run_id = store.create_run("line-2", 3, "learned", CONFIG)
     sink = StoreSink(store, run_id, batch_size=4, flush_interval_s=None)
     _emit_search(Emitter(run_id, sink), 4)
@@ -430,10 +442,18 @@ def test_second_store_on_the_same_file_sees_the_data(db: Path, store: RunStore) 
         assert reader.get_run(run_id) == store.get_run(run_id)
         assert reader.events(run_id) == store.events(run_id)
         assert len(reader.stream_queries()) == 4
-    with sqlite3.connect(db) as conn:
-        assert conn.execute("PRAGMA journal_mode").fetchone() == ("wal",)
-        indices = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='index'")}
+    indices = {
+        i["name"]
+        for table in ("runs", "stream_queries")
+        for i in inspect(store.engine).get_indexes(table)
+    }
     assert {"ix_stream_queries_stream", "ix_stream_queries_run_id", "ix_runs_created_at"} <= indices
+
+
+def test_a_sqlite_store_reads_while_it_is_written(sqlite_db: Path) -> None:
+    RunStore(sqlite_db).close()
+    with sqlite3.connect(sqlite_db) as conn:
+        assert conn.execute("PRAGMA journal_mode").fetchone() == ("wal",)
 
 
 def test_unknown_run_ids_are_key_errors_naming_the_id(store: RunStore) -> None:
@@ -482,8 +502,8 @@ def test_in_memory_url_is_one_database_across_threads() -> None:
         assert len(store.events(run_id)) == 7
 
 
-def _open_at_once(path: Path, n: int) -> list[Exception]:
-    """``n`` threads open the store at ``path`` at the same moment and record a run each."""
+def _open_at_once(url: str, n: int) -> list[Exception]:
+    """``n`` threads open the store at ``url`` at the same moment and record a run each."""
     import threading
 
     barrier = threading.Barrier(n)
@@ -492,7 +512,7 @@ def _open_at_once(path: Path, n: int) -> list[Exception]:
     def open_and_record(seed: int) -> None:
         barrier.wait()
         try:
-            with RunStore(path) as store:
+            with RunStore(url) as store:
                 store.create_run("line-2", seed, "baseline", {})
         except Exception as exc:
             errors.append(exc)
@@ -505,68 +525,77 @@ def _open_at_once(path: Path, n: int) -> list[Exception]:
     return errors
 
 
-def test_many_openers_of_a_new_store_at_once_all_get_it(tmp_path: Path) -> None:
-    """Trials started together on a fresh store file race to create its tables; before, the
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_many_openers_of_a_new_store_at_once_all_get_it(
+    backend: str, tmp_path: Path, request: pytest.FixtureRequest
+) -> None:
+    """Trials started together on a fresh store race to create its tables; before, the
     loser died with "table runs already exists" (or "database is locked") and its trial was
     never recorded."""
     for attempt in range(5):
-        path = tmp_path / f"fresh-{attempt}.db"
-        assert not _open_at_once(path, 4)
-        with RunStore(path) as store:
+        if backend == "sqlite":
+            url = str(tmp_path / f"fresh-{attempt}.db")
+        else:
+            url = request.getfixturevalue("postgres").new_database()
+        assert not _open_at_once(url, 4)
+        with RunStore(url) as store:
             assert store.count_runs() == 4
 
 
-def _one_failed_query(store: RunStore, reason: str | None) -> str:
-    run_id = store.create_run("line-2", 3, "baseline", CONFIG)
-    sink = StoreSink(store, run_id, flush_interval_s=None)
-    emitter = Emitter(run_id, sink)
-    emitter.emit(RunStarted, scene="line-2", seed=3, planner="baseline", config=CONFIG)
-    emitter.emit(
-        StreamQueried,
-        node_id=1,
-        stream="sample-pose",
-        input_names=["?b", "?r"],
-        inputs=["b0", [0.0, 1.0]],
-        success=False,
-        wall_s=0.5,
-        cpu_s=0.5,
-        execution_s=0.0,
-        error=None,
-        reason=reason,
-    )
-    sink.close()
-    return run_id
+def _record_runs(url: str, seeds: list[int], steps: int) -> None:
+    """A benchmark's trial process: runs recorded one after the other, each in batches."""
+    with RunStore(url) as store:
+        for seed in seeds:
+            run_id = store.create_run("line-2", seed, "learned", CONFIG)
+            sink = StoreSink(store, run_id, batch_size=50)
+            emitter = Emitter(run_id, sink)
+            _emit_search(emitter, steps)
+            emitter.emit(
+                RunFinished,
+                status="solved",
+                planning_s=1.0,
+                execution_s=2.0,
+                oracle_s=0.5,
+                queries=steps,
+                message="",
+            )
+            sink.close()
+            store.finish_run(run_id, "solved", planning_s=1.0, queries=steps)
 
 
-def test_a_store_from_before_failure_reasons_opens_and_records_them(db: Path) -> None:
-    with RunStore(db) as store:
-        old = _one_failed_query(store, None)
-    with sqlite3.connect(db) as conn:  # the table as an older version wrote it
-        conn.execute("ALTER TABLE stream_queries DROP COLUMN reason")
-    with RunStore(db) as store:
-        (before,) = store.stream_queries(run_ids=[old])
-        assert not before.success and before.reason is None
-        new = _one_failed_query(store, "no path in 150 iterations")
-        (row,) = store.stream_queries(run_ids=[new])
-        assert row.reason == "no path in 150 iterations"
-        (event,) = [e for e in store.events(new) if isinstance(e, StreamQueried)]
-        assert event.reason == row.reason
+def test_four_writers_and_a_reader_at_once_lose_nothing(db: str) -> None:
+    """Four processes record runs into one store while a dashboard reads it: every event and
+    query arrives, and a reader only ever sees a run's events from 0 without a gap."""
+    import multiprocessing
 
-
-def test_a_store_from_before_run_owners_opens_and_treats_its_live_runs_as_orphans(
-    db: Path,
-) -> None:
-    with RunStore(db) as store:
-        old = store.create_run("line-2", 0, "baseline", {})
-    with sqlite3.connect(db) as conn:  # the table as an older version wrote it
-        conn.execute("DROP INDEX ix_runs_created_at")
-        conn.execute("ALTER TABLE runs DROP COLUMN owner")
-    with RunStore(db) as store:
-        new = store.create_run("line-2", 1, "baseline", {})
-        assert store.mark_interrupted() == 1  # nobody can say the old run's process lives
-        assert store.get_run(old).status == "interrupted"
-        assert store.get_run(new).status == "running"
-        assert [r.id for r in store.list_runs()] == [new, old]
+    RunStore(db).close()
+    steps, per_process = 100, 3
+    ctx = multiprocessing.get_context("spawn")
+    writers = [
+        ctx.Process(target=_record_runs, args=(db, [10 * w + i for i in range(per_process)], steps))
+        for w in range(4)
+    ]
+    for w in writers:
+        w.start()
+    reads = 0
+    with RunStore(db) as reader:
+        while any(w.is_alive() for w in writers) or reads == 0:
+            for run in reader.list_runs(limit=100):
+                seqs = [e.seq for e in reader.events(run.id)]
+                assert seqs == list(range(len(seqs)))  # a prefix, in order, never a gap
+                reads += 1
+        for w in writers:
+            w.join(timeout=120)
+            assert w.exitcode == 0
+        runs = reader.list_runs(limit=100)
+        assert sorted(r.seed for r in runs) == sorted(
+            10 * w + i for w in range(4) for i in range(per_process)
+        )
+        for run in runs:
+            assert run.status == "solved"
+            assert [e.seq for e in reader.events(run.id)] == list(range(3 * steps + 2))
+        assert len(reader.stream_queries()) == 4 * per_process * steps
+    assert reads > 0
 
 
 def test_an_exited_owner_not_yet_reaped_counts_as_gone(store: RunStore) -> None:
