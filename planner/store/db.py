@@ -340,9 +340,10 @@ def _engine_for(url_or_path: str | Path | URL) -> Engine:
 
     @event.listens_for(engine, "connect")
     def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
+        if not in_memory:
+            schema.enable_wal(dbapi_connection)  # readers never block the writer
         cursor = dbapi_connection.cursor()
         if not in_memory:
-            cursor.execute("PRAGMA journal_mode=WAL")  # readers never block the writer
             cursor.execute("PRAGMA synchronous=NORMAL")  # safe with WAL, no fsync per commit
         cursor.execute("PRAGMA foreign_keys=ON")
         cursor.close()

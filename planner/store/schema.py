@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import functools
 import logging
+import sqlite3
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -89,6 +91,30 @@ def _upgrade_locked(conn: Connection, where: str) -> None:
     command.upgrade(config, "head")
 
 
+WAL_WAIT_S = 30.0  # as long as a writer waits for the lock
+
+
+def enable_wal(dbapi_connection: Any) -> None:
+    """Put a SQLite file in WAL mode. A new file's first openers race for the switch, and
+    SQLite answers "database is locked" to the losers at once (the switch needs the file to
+    itself and does not call the busy handler), so the switch is tried again until it is made
+    or :data:`WAL_WAIT_S` has passed."""
+    deadline = time.monotonic() + WAL_WAIT_S
+    delay = 0.005
+    while True:
+        cursor = dbapi_connection.cursor()
+        try:
+            cursor.execute("PRAGMA journal_mode=WAL")
+            return
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) or time.monotonic() > deadline:
+                raise
+        finally:
+            cursor.close()
+        time.sleep(delay)
+        delay = min(delay * 2, 0.2)
+
+
 def _immediate_sqlite(engine: Engine) -> Engine:
     """An engine on the same SQLite file whose transactions take the write lock at BEGIN
     (pysqlite alone would begin none before DDL, so two openers could both add a column)."""
@@ -96,8 +122,8 @@ def _immediate_sqlite(engine: Engine) -> Engine:
 
     @event.listens_for(locking, "connect")
     def _pragmas(dbapi_connection: Any, _record: Any) -> None:
+        enable_wal(dbapi_connection)
         cursor = dbapi_connection.cursor()
-        cursor.execute("PRAGMA journal_mode=WAL")
         cursor.execute("PRAGMA foreign_keys=ON")
         cursor.close()
 
