@@ -40,7 +40,29 @@ APP = create_app(
         allowed_hosts=["testserver"],  # the host schemathesis's ASGI client sends
     )
 )
-schema = schemathesis.openapi.from_asgi("/openapi.json", APP)
+
+
+async def _requests_only(scope: dict[str, Any], receive: Any, send: Any) -> None:
+    """APP for schemathesis: requests pass through, its lifespan messages are answered here.
+
+    Schemathesis starts an ASGI app's lifespan for each operation's test and shuts it down at the
+    test's end; APP's shut-down cancels every queued run and stops the running one, so launches
+    fuzzed in one operation would never plan. The module's ``lifespan`` fixture runs APP's
+    start-up and shut-down once, around every test here.
+    """
+    if scope["type"] != "lifespan":
+        await APP(scope, receive, send)
+        return
+    while True:
+        message = await receive()
+        if message["type"] == "lifespan.startup":
+            await send({"type": "lifespan.startup.complete"})
+        elif message["type"] == "lifespan.shutdown":
+            await send({"type": "lifespan.shutdown.complete"})
+            return
+
+
+schema = schemathesis.openapi.from_asgi("/openapi.json", _requests_only)
 
 
 @schema.hook
