@@ -325,7 +325,7 @@ PlannerSpecName = Annotated[
         max_length=200,
         description="a planner (baseline, paper, learned, sequential) or a variant such as "
         "learned:shared_culprits=off",
-        examples=["baseline", "learned:calibration=off"],
+        examples=["baseline", "learned:dead_ends=off"],
     ),
 ]
 

@@ -8,6 +8,7 @@ workers call.
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,6 +22,8 @@ from planner.planners import DEFAULT_PLANNER, ORDERS, PLANNERS
 
 if TYPE_CHECKING:
     from planner.store import RunStore
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "DEFAULT_PLANNER",
@@ -42,11 +45,21 @@ def preload_libraries(config: RunConfig) -> None:
     Libraries are process set-up for every planner, not planning: the baseline's (the top-k
     planner, and what a domain's samplers import when they are bound) come before any run, and a
     server imports each once. The model's (torch) were imported lazily inside the run, so a fresh
-    process charged a learned run about 3 s of torch import (4.5 s under load) as planning.
-    Reading the model file stays inside the clock.
+    process charged a learned run about 3 s of torch import (4.5 s under load) as planning. The
+    domains are imported here too: finding a scene by name imports every installed domain
+    (the kitchen's pybullet among them), 1 to 2 s that a fresh trial process charged every
+    planner alike. Reading the scene, building its problem and reading the model file stay
+    inside the clock. A scene or domain that cannot load is left for the run to report.
     """
     if config.uses_model:
         import planner.learning.predictor  # noqa: F401
+    from planner.domains import domain_of_scene, find_scene, load_domain
+
+    try:
+        given = load_domain(config.domain) if config.domain is not None else None
+        domain_of_scene(find_scene(config.scene, domain=given), given)
+    except Exception as exc:  # the run itself reports what is wrong, as a failed run
+        log.debug("preloading %s: %s", config.scene, exc)
 
 
 def run(

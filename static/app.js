@@ -273,7 +273,7 @@ function syncForm() {
   if (keep) el.model.value = keep.name;
 }
 
-/** The learned planners (paper, learned and their variants such as learned:calibration=off). */
+/** The learned planners (paper, learned and their variants such as learned:dead_ends=off). */
 function usesModel(planner) {
   const name = String(planner ?? "").split(":")[0];
   return name === "learned" || name === "paper";

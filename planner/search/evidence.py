@@ -1,8 +1,5 @@
 """What failed queries teach the learned search, apart from the policy that reads it.
 
-- **Outcomes of a query** (``attempt_posterior``, ``pooled_evidence``): how often a node's next
-  query succeeded and failed from it; pooled, over every node that makes the same query (one
-  identity, :func:`planner.search.queries.query_identity`), so a failure seen anywhere counts.
 - **Dead ends** (``dead_ends``): a node whose next query has failed, or led only to dead ends,
   more often in a row than its prediction explains (:func:`planner.search.costs.dead_after`).
   Its reason is the objects those failures depend on; if the node's own outputs are not among
@@ -11,34 +8,36 @@
   attempt of its parent's query.
 - **Shared culprits** (``shared_culprits``): a query that keeps failing while a later choice it
   depends on varies is blamed on the earlier choices every failure shared (the same query is
-  then never asked twice, so its identity alone cannot pool it).
+  then never asked twice, so nothing else ties the failures together).
 
-:class:`Evidence` recomputes all of it at each refresh from the tree and from what the policy
-knows of each node (:class:`NodeQueries`); it holds no policy state.
+Both are kept up to date as the tree grows: a refresh costs what its new nodes change, not the
+whole tree (the search's own seconds per node stay flat as the tree grows). A node is a dead end
+while anything marks it: its own failures, or a dead end below it whose reason it did not bind,
+or a shared culprit. Its reason is the union of its marks' reasons, so backjumping stops at the
+nearest node that bound anything a failure below depends on.
 """
 
 from __future__ import annotations
 
-import bisect
 import heapq
 import json
-from collections.abc import Callable, Mapping
+from collections import Counter
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from planner.search.costs import P_MAX, P_MIN, StreamCost, dead_after
+from planner.search.costs import StreamCost, dead_after
 from planner.search.tree import ROOT, Node, Tree
 
 SHARED_MIN = 3  # failures under varied later choices before the earlier ones they share are blamed
-MAX_ROUNDS = 64  # rounds of dead ends failing their parents' queries (a fixpoint comes first)
+
+_Source = tuple[str, int]  # ("own", node): its own failures; ("shared", node): a shared culprit
 
 
 class NodeQueries(Protocol):
-    """What the evidence reads of a node that queries: the identity of its next query (None
-    while an input is unbound), that query's prediction, and the objects its outcome depends
-    on (its inputs and the objects of the facts of its identity)."""
-
-    def key(self, node: Node) -> str | None: ...
+    """What the evidence reads of a node that queries: its next query's prediction (None while
+    the node is not predicted) and the objects that query's outcome depends on (its inputs and
+    the objects of the fluent facts that matter)."""
 
     def first(self, node: Node) -> StreamCost | None: ...
 
@@ -46,322 +45,279 @@ class NodeQueries(Protocol):
 
 
 @dataclass
+class _Aggregate:
+    """The members of a group that agree on the values bound up to one depth."""
+
+    members: list[int] = field(default_factory=list)
+    failing: int = 0  # members whose query never succeeded
+    children: int = 0  # attempts made from the members
+    queries: Counter[tuple[str, ...]] = field(default_factory=Counter)  # their whole queries
+
+
+@dataclass
+class _Group:
+    """The nodes that make one stream's query of one plan (one depth of it), for shared culprits:
+    the depths that bound the values their query depends on, and per depth the members that
+    agree on the values bound up to it."""
+
+    names: tuple[str, ...] = ()  # the values the query depends on, sorted
+    bound_at: tuple[int, ...] = ()  # the depth that bound each (0: the problem's own)
+    cuts: tuple[int, ...] = ()  # depths to cut at, deepest first (the query's own left out)
+    members: set[int] = field(default_factory=set)
+    failing: set[int] = field(default_factory=set)
+    latest: list[int] = field(default_factory=list)  # max-heap (negated) of failing members
+    by_cut: dict[int, dict[tuple[str, ...], _Aggregate]] = field(default_factory=dict)
+    blamed: tuple[int, tuple[str, ...]] | None = None  # the (cut, values) blamed last
+    marked: int = 0  # how many of the blamed aggregate's members carry its mark
+
+
+@dataclass
 class Evidence:
-    """Outcomes and dead ends as of the last :meth:`refresh` (see the module)."""
+    """Dead ends as of the last :meth:`refresh` (see the module)."""
 
     queries: NodeQueries
     encode: Callable[[Any], Any]
     initial_values: Mapping[str, Any]
-    pooled: bool = True  # pooled_evidence
     dead_ends: bool = True  # dead_ends
     shared_culprits: bool = True  # shared_culprits
     use_prior: bool = True  # dead_end_prior: a foreseen dead end is dead sooner
-    p_min: float = P_MIN
-    p_max: float = P_MAX
-    groups: dict[str, list[int]] = field(default_factory=dict)  # identity -> nodes that make it
-    counts: dict[str, tuple[int, int]] = field(default_factory=dict)  # identity -> ok, failed
-    dead: set[int] = field(default_factory=set)
-    _sigs: dict[int, tuple[dict[str, str], dict[str, int]]] = field(default_factory=dict)
-    # What refreshes keep up to date: nodes seen, the deepest success below each node, nodes
-    # whose children all failed, queries with a failed attempt, the nodes of each stream of
-    # each plan that query from it (and which of those groups changed), each group's culprits.
+    # Per dead node: its reason (the union of its marks' reasons).
+    reasons: dict[int, frozenset[str]] = field(default_factory=dict)
     _seen: int = 0
-    _deepest: dict[int, int] = field(default_factory=dict)
-    _failing: set[int] = field(default_factory=set)
-    _failed_keys: set[str] = field(default_factory=set)
-    _members: dict[tuple[int, int], list[int]] = field(default_factory=dict)
-    _member_set: set[int] = field(default_factory=set)
-    _stale_groups: set[tuple[int, int]] = field(default_factory=set)
-    _culprits: dict[tuple[int, int], list[tuple[Node, set[str]]]] = field(default_factory=dict)
-    # Per query identity: its attempts that failed (with the least depth among them) and those
-    # that succeeded; per node: how many failures in a row make it a dead end.
-    _attempts_failed: dict[str, list[int]] = field(default_factory=dict)
-    _failed_depth: dict[str, int] = field(default_factory=dict)
-    _attempts_ok: dict[str, list[int]] = field(default_factory=dict)
+    _marks: dict[int, dict[_Source, frozenset[str]]] = field(default_factory=dict)
+    _chains: dict[_Source, tuple[frozenset[str], list[int]]] = field(default_factory=dict)
+    _live: Counter[int] = field(default_factory=Counter)  # per node: children alive
+    _ok: Counter[int] = field(default_factory=Counter)  # per node: children that succeeded
+    _below: dict[int, Counter[str]] = field(default_factory=dict)  # dead children's reasons
     _threshold: dict[int, int] = field(default_factory=dict)
-    _keys: dict[int, str] = field(default_factory=dict)  # node -> its next query's identity
-
-    def add_maker(self, key: str, node: int) -> None:
-        """``node``'s children are attempts of the query ``key``."""
-        self.groups.setdefault(key, []).append(node)
-
-    def outcomes(self, tree: Tree, node: Node | None, key: str | None) -> tuple[int, int] | None:
-        """(ok, failed) attempts of query ``key`` as ``node``'s next query (``node`` None: a
-        query further ahead). Pooled: over every node that makes it; else ``node``'s own
-        attempts only (none for a query further ahead). A dead end is a failed attempt."""
-        if self.pooled:
-            return self.counts.get(key) if key is not None else None
-        if node is None or not node.children:
-            return None
-        ok = sum(1 for c in node.children if tree[c].success and c not in self.dead)
-        return ok, len(node.children) - ok
+    _groups: dict[tuple[int, int], _Group] = field(default_factory=dict)
+    _stale: set[tuple[int, int]] = field(default_factory=set)
+    _keys: dict[int, tuple[tuple[str, ...], list[tuple[str, ...]]]] = field(default_factory=dict)
+    _changed: set[int] = field(default_factory=set)
+    _queue: list[int] = field(default_factory=list)
+    _queued: set[int] = field(default_factory=set)
 
     @property
-    def any(self) -> bool:
-        """Whether any outcome is known (nothing to update otherwise)."""
-        return bool(self.counts) if self.pooled else True
+    def dead(self) -> Mapping[int, frozenset[str]]:
+        """The nodes taken for dead ends (with their reasons), as of the last refresh."""
+        return self.reasons
 
-    def refresh(self, tree: Tree) -> set[str]:
-        """Dead ends, then the outcomes of every query made (outcomes only, never measured
-        seconds: the same seed makes the same search); returns the queries whose outcomes
-        changed. Incremental: what the tree's new nodes change is updated, the rest kept."""
+    def refresh(self, tree: Tree) -> set[int]:
+        """Take in the tree's new nodes; returns the nodes that became or stopped being dead
+        ends."""
+        self._changed = set()
         new = tree.nodes[max(self._seen, 1) :]
         self._seen = len(tree.nodes)
-        touched: set[int] = set()  # nodes with new children: their queries' outcomes changed
+        if not self.dead_ends:
+            return set()
         for node in new:
-            self._grow(tree, node)
-            if node.parent is not None:
-                touched.add(node.parent)
-        before = self.dead
-        self.dead = self._dead_ends(tree, touched) if self.dead_ends else set()
-        for node_id in before ^ self.dead:
-            parent = tree[node_id].parent
-            if parent is not None:
-                touched.add(parent)
-        changed: set[str] = set()
-        for key in {k for n in touched if (k := self._maker_key(tree, n)) is not None}:
-            ok = failed = 0
-            for n in self.groups.get(key, ()):
-                for c in tree[n].children:
-                    if tree[c].success and c not in self.dead:
-                        ok += 1
-                    else:
-                        failed += 1
-            now = (ok, failed) if ok or failed else None
-            if now != self.counts.get(key):
-                changed.add(key)
-                if now is None:
-                    del self.counts[key]
-                else:
-                    self.counts[key] = now
+            parent = node.parent
+            if parent is None or parent == ROOT:
+                continue
+            if node.success:
+                self._live[parent] += 1
+                self._ok[parent] += 1
+            self._push(parent)
+            if self.shared_culprits:
+                self._join(tree, tree[parent], node)
+        for key in sorted(self._stale):
+            self._blame(tree, self._groups[key])
+        self._stale.clear()
+        while self._queue:
+            node_id = -heapq.heappop(self._queue)
+            self._queued.discard(node_id)
+            self._evaluate(tree, tree[node_id])
+        changed, self._changed = self._changed, set()
         return changed
 
-    def _maker_key(self, tree: Tree, node_id: int) -> str | None:
-        """The identity of the query ``node_id``'s children are attempts of (None: none)."""
-        if node_id == ROOT:
-            return None
-        found = self._keys.get(node_id)
-        if found is None:
-            found = self.queries.key(tree[node_id])
-            if found is not None:  # known once the node is predicted, and fixed from then on
-                self._keys[node_id] = found
-        return found
+    # --- a node's own failures ---------------------------------------------------------------
 
-    def _grow(self, tree: Tree, node: Node) -> None:
-        """Take in a new node: the deepest success below each ancestor, which nodes have only
-        failed children, which queries have a failed attempt, which groups changed."""
-        depth = node.depth if node.success else -1
-        self._deepest[node.id] = max(self._deepest.get(node.id, -1), depth)
-        current = node.parent
-        while current is not None and self._deepest.get(current, -1) < depth:
-            self._deepest[current] = depth
-            current = tree[current].parent
-        parent = node.parent
-        if parent is None or parent == ROOT:
-            return
-        if node.success:
-            self._failing.discard(parent)
-        elif not any(tree[c].success for c in tree[parent].children):
-            self._failing.add(parent)
-        key = self._maker_key(tree, parent)
-        if key is not None:
-            if node.success:
-                self._attempts_ok.setdefault(key, []).append(node.id)
-            else:
-                self._failed_keys.add(key)
-                self._attempts_failed.setdefault(key, []).append(node.id)
-                depth_now = self._failed_depth.get(key)
-                if depth_now is None or node.depth < depth_now:
-                    self._failed_depth[key] = node.depth
-        maker = tree[parent]
-        if maker.success and maker.depth > 0 and self.queries.first(maker) is not None:
-            group = (maker.plan_index, maker.depth)
-            members = self._members.setdefault(group, [])
-            if maker.id not in self._member_set:
-                self._member_set.add(maker.id)
-                bisect.insort(members, maker.id)
-            self._stale_groups.add(group)
-
-    # --- dead ends ---------------------------------------------------------------------------
-
-    def _dead_after(self, cost: StreamCost) -> int:
-        prior = cost.p_prior if self.use_prior else None
-        return dead_after(cost.p_s, p_prior=prior, p_min=self.p_min, p_max=self.p_max)
+    def _push(self, node_id: int) -> None:
+        if node_id != ROOT and node_id not in self._queued:
+            self._queued.add(node_id)
+            heapq.heappush(self._queue, -node_id)  # deepest (newest) first: children, then parents
 
     def _threshold_of(self, node: Node, first: StreamCost) -> int:
         found = self._threshold.get(node.id)
         if found is None:
-            found = self._threshold[node.id] = self._dead_after(first)
+            prior = first.p_prior if self.use_prior else None
+            found = self._threshold[node.id] = dead_after(first.p_s, p_prior=prior)
         return found
 
-    def _dead_ends(self, tree: Tree, touched: set[int]) -> set[int]:
-        """Nodes whose every continuation is taken to fail (see the module), to a fixpoint: a
-        new dead end fails its parent's query, which may make the parent one. A fresh attempt
-        elsewhere that has not yet reached the failing depth does not stop the pooling. Only
-        nodes with no live child can be dead ends: those whose children all failed, and the
-        parents of dead ends."""
-        dead: dict[int, set[str]] = {}  # node -> the objects its failures depend on
-        origin: dict[int, int] = {}  # dead node -> depth of the failures behind it
-        shared = self._shared_culprits(tree) if self.shared_culprits else []
-        for _ in range(MAX_ROUNDS):  # new dead ends fail their parents' queries: pool again
-            pooled = self._pooled_failures(tree, dead, origin) if self.pooled else {}
-            before = len(dead), sum(len(r) for r in dead.values())
-            for node, reason in shared:
-                if dead.get(node.id) == reason:
-                    continue
-                depth = min(origin.get(c, tree[c].depth) for c in node.children)
-                _mark(tree, dead, origin, node, reason, depth)
-            parents = {tree[d].parent for d in dead} - {None, ROOT}
-            heap = [-n for n in self._failing | parents if n is not None]
-            heapq.heapify(heap)
-            queued = {-h for h in heap}
-            while heap:
-                node = tree[-heapq.heappop(heap)]
-                if node.id in dead or not node.success or node.depth == 0:
-                    continue
-                first = self.queries.first(node)
-                if first is None or not node.children:
-                    continue  # complete, or not queried from yet
-                if any(tree[c].success and c not in dead for c in node.children):
-                    continue
-                key = self._maker_key(tree, node.id)
-                failures = max(len(node.children), pooled.get(key, 0) if key is not None else 0)
-                if failures < self._threshold_of(node, first):
-                    continue
-                reason = self.queries.relevant(node)
-                depth = min(origin.get(c, tree[c].depth) for c in node.children)
-                for c in node.children:
-                    if c in dead:
-                        reason |= dead[c] - set(tree[c].outputs)
-                for marked in _mark(tree, dead, origin, node, reason, depth):
-                    parent = tree[marked].parent
-                    if parent is not None and parent not in queued:
-                        queued.add(parent)
-                        heapq.heappush(heap, -parent)
-            if (len(dead), sum(len(r) for r in dead.values())) == before:
-                break
-        return set(dead)
+    def _evaluate(self, tree: Tree, node: Node) -> None:
+        """Whether the node's own failures make it a dead end, and why."""
+        reason: frozenset[str] | None = None
+        first = self.queries.first(node) if node.success and node.depth > 0 else None
+        if (
+            first is not None
+            and node.children
+            and not self._live[node.id]
+            and len(node.children) >= self._threshold_of(node, first)
+        ):
+            below = self._below.get(node.id)
+            reason = frozenset(self.queries.relevant(node)) | frozenset(below or ())
+        self._set_source(tree, ("own", node.id), node, reason)
 
-    def _pooled_failures(
-        self, tree: Tree, dead: Mapping[int, set[str]], origin: Mapping[int, int]
-    ) -> dict[str, int]:
-        """Per query identity: how often it has failed, or led only to a dead end, over every
-        node that made it; left out while an attempt that is not a dead end got past the
-        depth where those failures happened. Only queries with a failed attempt or a dead end
-        among their attempts can have any."""
-        keys = set(self._failed_keys)
-        for d in dead:
-            key = self._maker_key(tree, tree[d].parent or ROOT)
-            if key is not None:
-                keys.add(key)
-        out: dict[str, int] = {}
-        deepest = self._deepest
-        for key in keys:
-            failed = self._attempts_failed.get(key, ())
-            ok = self._attempts_ok.get(key, ())
-            dead_ok = [c for c in ok if c in dead]
-            if not failed and not dead_ok:
-                continue
-            depths = [origin.get(c, tree[c].depth) for c in dead_ok]
-            if failed:
-                depths.append(self._failed_depth[key])
-            depth = min(depths)
-            if not any(c not in dead and deepest.get(c, -1) >= depth for c in ok):
-                out[key] = len(failed) + len(dead_ok)
-        return out
+    # --- marks -------------------------------------------------------------------------------
 
-    def _signature(self, tree: Tree, node: Node) -> tuple[dict[str, str], dict[str, int]]:
-        """The values of the objects ``node``'s next query depends on, encoded so that equal
-        values compare equal, and the depth that bound each (0: the problem's own objects)."""
-        cached = self._sigs.get(node.id)
-        if cached is not None:
-            return cached
+    def _set_source(
+        self, tree: Tree, source: _Source, node: Node, reason: frozenset[str] | None
+    ) -> None:
+        """Mark ``node`` (and its ancestors up to the one that bound part of ``reason``) as a
+        dead end for ``source``; None: ``source`` marks nothing any more."""
+        old = self._chains.get(source)
+        if (old[0] if old else None) == reason:
+            return
+        touched: list[int] = []
+        if old is not None:
+            for n in old[1]:
+                del self._marks[n][source]
+                touched.append(n)
+            del self._chains[source]
+        if reason is not None:
+            chain = _chain(tree, node, reason)
+            self._chains[source] = (reason, chain)
+            for n in chain:
+                self._marks.setdefault(n, {})[source] = reason
+                touched.append(n)
+        for n in dict.fromkeys(touched):
+            self._settle(tree, tree[n])
+
+    def _settle(self, tree: Tree, node: Node) -> None:
+        """The node's reason from its marks; its parent hears of any change."""
+        marks = self._marks.get(node.id)
+        now = frozenset().union(*marks.values()) if marks else None
+        if not marks:
+            self._marks.pop(node.id, None)
+        before = self.reasons.get(node.id)
+        if now == before:
+            return
+        if now is None:
+            del self.reasons[node.id]
+        else:
+            self.reasons[node.id] = now
+        if (before is None) != (now is None):
+            self._changed ^= {node.id}
+        parent = node.parent
+        if parent is None or parent == ROOT:
+            return
+        if node.success and (before is None) != (now is None):
+            self._live[parent] += -1 if now is not None else 1
+        outputs = set(node.outputs)
+        below = self._below.setdefault(parent, Counter())
+        if before is not None:
+            below.subtract(n for n in before if n not in outputs)
+        if now is not None:
+            below.update(n for n in now if n not in outputs)
+        for name in [n for n, k in below.items() if k <= 0]:
+            del below[name]
+        self._push(parent)
+
+    # --- shared culprits ---------------------------------------------------------------------
+
+    def _join(self, tree: Tree, maker: Node, child: Node) -> None:
+        """Count ``child`` as an attempt of ``maker``'s query in its group."""
+        if not maker.success or maker.depth == 0 or self.queries.first(maker) is None:
+            return
+        key = (maker.plan_index, maker.depth)
+        group = self._groups.get(key)
+        if maker.id not in self._keys:
+            whole, cuts, group = self._signature(tree, maker, group)
+            self._groups[key] = group
+            self._keys[maker.id] = (whole, cuts)
+            group.members.add(maker.id)
+            group.failing.add(maker.id)
+            heapq.heappush(group.latest, -maker.id)
+            for cut, values in zip(group.cuts, cuts, strict=True):
+                agg = group.by_cut.setdefault(cut, {}).setdefault(values, _Aggregate())
+                agg.members.append(maker.id)
+                agg.failing += 1
+                agg.queries[whole] += 1
+        assert group is not None
+        whole, cuts = self._keys[maker.id]
+        stopped = child.success and self._ok[maker.id] == 1  # its first success, just counted
+        if stopped:
+            group.failing.discard(maker.id)
+        for cut, values in zip(group.cuts, cuts, strict=True):
+            agg = group.by_cut[cut][values]
+            agg.children += 1
+            if stopped:
+                agg.failing -= 1
+        self._stale.add(key)
+
+    def _signature(
+        self, tree: Tree, node: Node, group: _Group | None
+    ) -> tuple[tuple[str, ...], list[tuple[str, ...]], _Group]:
+        """The encoded values ``node``'s query depends on (equal values compare equal), and
+        those bound up to each of its group's cuts; the group itself if it is new."""
         values = dict(self.initial_values)
         bound_at: dict[str, int] = {}
         for i in tree.path(node.id):
             for name, value in tree[i].outputs.items():
                 values[name] = value
                 bound_at[name] = tree[i].depth
-        sig = {
-            name: json.dumps(self.encode(values[name]), sort_keys=True, default=str)
-            for name in sorted(self.queries.relevant(node))
-            if name in values
-        }
-        cached = (sig, {name: bound_at.get(name, 0) for name in sig})
-        self._sigs[node.id] = cached
-        return cached
+        if group is None:
+            names = tuple(sorted(n for n in self.queries.relevant(node) if n in values))
+            depths = tuple(bound_at.get(n, 0) for n in names)
+            group = _Group(names, depths, tuple(sorted(set(depths), reverse=True)[1:]))
+        encoded = tuple(
+            json.dumps(self.encode(values[n]), sort_keys=True, default=str) if n in values else ""
+            for n in group.names
+        )
+        cuts = [
+            tuple(v for v, d in zip(encoded, group.bound_at, strict=True) if d <= cut)
+            for cut in group.cuts
+        ]
+        return encoded, cuts, group
 
-    def _shared_culprits(self, tree: Tree) -> list[tuple[Node, set[str]]]:
-        """Per stream of a plan: take the latest node whose query there failed every time it
-        was made, and the values that query depended on; from the deepest choice up, drop the
-        values bound last until the nodes whose query agrees on the rest have failed at least
-        :data:`SHARED_MIN` times (and as often as ``dead_after`` asks) with no success among
-        them, and differ in what was dropped. Those nodes are dead ends because of the values
-        kept, and the search backs up to the last of them. A group of nodes (one stream of one
-        plan) is looked at again only when one of them has new children."""
-        for group in self._stale_groups:
-            self._culprits[group] = self._group_culprits(tree, self._members[group])
-        self._stale_groups.clear()
-        out: list[tuple[Node, set[str]]] = []
-        for group in sorted(self._members, key=lambda g: self._members[g][0]):
-            out += self._culprits.get(group, [])
-        return out
-
-    def _group_culprits(self, tree: Tree, member_ids: list[int]) -> list[tuple[Node, set[str]]]:
-        makers = [tree[m] for m in member_ids]
-
-        def failed(n: Node) -> bool:  # the query itself failed, every time it was made here
-            return not any(tree[c].success for c in n.children)
-
-        failing = [n for n in makers if failed(n)]
-        if len(failing) < SHARED_MIN:
-            return []
-        latest = failing[-1]
-        sig, bound_at = self._signature(tree, latest)
-        first = self.queries.first(latest)
-        assert first is not None
-        need = max(SHARED_MIN, self._dead_after(first))
-        depths = sorted(set(bound_at.values()), reverse=True)
-        for cut in depths[1:]:  # the deepest cut is the query's identity: pooled already
-            kept = {n: v for n, v in sig.items() if bound_at[n] <= cut}
-            agree = [m for m in makers if self._agrees(tree, m, kept)]
-            if not all(failed(m) for m in agree):
-                break  # a success shares these values: so would every shallower cut's
-            failures = sum(len(m.children) for m in agree)
-            if failures < need:
-                continue
-            if len({tuple(self._signature(tree, m)[0].items()) for m in agree}) < 2:
-                continue  # the same query each time: its identity pools it
-            reason = set(kept)
-            return [(m, reason) for m in agree]
-        return []
-
-    def _agrees(self, tree: Tree, node: Node, kept: Mapping[str, str]) -> bool:
-        sig = self._signature(tree, node)[0]
-        return all(sig.get(n) == v for n, v in kept.items())
+    def _blame(self, tree: Tree, group: _Group) -> None:
+        """Take the latest member whose query failed every time it was made, and the values it
+        depends on; from the deepest choice up, drop the values bound last until the members
+        agreeing on the rest have failed at least :data:`SHARED_MIN` times (and as often as
+        ``dead_after`` asks) with no success among them, and differ in what was dropped. Those
+        members are dead ends because of the values kept, and the search backs up to the last
+        of them."""
+        while group.latest and -group.latest[0] not in group.failing:
+            heapq.heappop(group.latest)
+        found: tuple[int, tuple[str, ...]] | None = None
+        if len(group.failing) >= SHARED_MIN and group.latest:
+            latest = tree[-group.latest[0]]
+            first = self.queries.first(latest)
+            assert first is not None
+            need = max(SHARED_MIN, self._threshold_of(latest, first))
+            for cut, values in zip(group.cuts, self._keys[latest.id][1], strict=True):
+                agg = group.by_cut[cut][values]
+                if agg.failing != len(agg.members):
+                    break  # a success shares these values: so would every shallower cut's
+                if agg.children < need or len(agg.queries) < 2:
+                    continue  # too few failures, or the same query each time
+                found = (cut, values)
+                break
+        if found != group.blamed:
+            if group.blamed is not None:
+                for m in group.by_cut[group.blamed[0]][group.blamed[1]].members:
+                    self._set_source(tree, ("shared", m), tree[m], None)
+            group.blamed, group.marked = found, 0
+        if found is None:
+            return
+        cut, _ = found
+        reason = frozenset(n for n, d in zip(group.names, group.bound_at, strict=True) if d <= cut)
+        members = group.by_cut[cut][found[1]].members
+        for m in members[group.marked :]:
+            self._set_source(tree, ("shared", m), tree[m], reason)
+        group.marked = len(members)
 
 
-def _mark(
-    tree: Tree,
-    dead: dict[int, set[str]],
-    origin: dict[int, int],
-    node: Node,
-    reason: set[str],
-    depth: int,
-) -> list[int]:
-    """Take ``node`` for a dead end because of ``reason`` (the objects its failures, at
-    ``depth``, depend on), and its ancestors up to the one that bound one of them; returns the
-    nodes marked."""
+def _chain(tree: Tree, node: Node, reason: Iterable[str]) -> list[int]:
+    """``node`` and its ancestors up to the first that bound part of ``reason`` (not the plan's
+    node at depth 0): the nodes a dead end for ``reason`` at ``node`` makes dead ends too."""
+    reason = set(reason)
     current = node
-    dead[current.id] = reason
-    origin[current.id] = depth
-    marked = [current.id]
+    chain = [current.id]
     while not (set(current.outputs) & reason) and current.parent is not None:
         parent = tree[current.parent]
         if parent.depth == 0 or parent.id == ROOT:
             break
-        dead[parent.id] = reason
-        origin[parent.id] = depth
-        marked.append(parent.id)
+        chain.append(parent.id)
         current = parent
-    return marked
+    return chain

@@ -115,11 +115,11 @@ def test_each_case_is_solved_by_the_learned_planner_through_the_api(name: str) -
     case.check(case, out.result.bound)
 
 
-def test_without_attempt_posterior_the_search_insists_on_a_failing_test() -> None:
+def test_the_papers_planner_insists_on_a_failing_test_and_dead_ends_stop_it() -> None:
     """The paper's planner scores "query again" by the model's Eq. 1 however often the query
     failed: in ``rule`` its first plan's reach test fails for the only pose it sampled, and it
-    asks that test again and again. With ``attempt_posterior`` each failure makes insisting
-    costlier, and it re-samples the pose and solves."""
+    asks that test again and again. With ``dead_ends`` the failures make that node a dead end,
+    blamed on the pose the test reads, and the search samples another pose and solves."""
     from collections import Counter
 
     from planner.api import plan
@@ -132,5 +132,5 @@ def test_without_attempt_posterior_the_search_insists_on_a_failing_test() -> Non
     failed = Counter((e.stream, str(e.inputs)) for e in sink.events if isinstance(e, StreamQueried))
     assert stuck.status == "timeout"
     assert failed.most_common(1)[0][1] > 100  # the same query, over and over
-    fixed = plan(case.problem, "paper:attempt_posterior=on", domain=domain, k=8, budget_s=30)
+    fixed = plan(case.problem, "paper:dead_ends=on", domain=domain, k=8, budget_s=30)
     assert fixed.status == "solved" and len(fixed.result.queries) < 20

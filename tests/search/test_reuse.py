@@ -4,19 +4,15 @@ unrelated choice changed costs nothing)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-
-import pytest
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.events import Emitter, ListSink, StreamQueried
 from planner.pddl.parser import parse_domain, parse_problem, parse_streams
 from planner.search.binding import stream_contexts
-from planner.search.learned import LearnedConfig, LearnedPolicy, StreamCost
-from planner.search.mcts import BaselinePolicy, Policy, TreeSearch
+from planner.search.mcts import BaselinePolicy, TreeSearch
 from planner.search.tree import ROOT
 from planner.store import RunStore, StoreSink
 from planner.streams.adapters import from_fn
@@ -56,24 +52,9 @@ class Trajectory:
     seconds: float
 
 
-class Guess:
-    """IK is certain and cheap; a motion takes 3 s to plan and 5 s to run, 9 in 10 succeed."""
-
-    def predict_rows(
-        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
-    ) -> list[StreamCost]:
-        return [
-            StreamCost(0.9, 3.0, 3.0, 5.0) if stream == "plan-motion" else StreamCost(1, 0.01, 0, 0)
-            for stream, _, _ in rows
-        ]
-
-
 def make(
     sink: ListSink | StoreSink | None = None,
     run_id: str = "r",
-    *,
-    learned: bool = False,
-    config: LearnedConfig | None = None,
 ) -> tuple[TreeSearch, list[Any]]:
     domain = parse_domain(DOMAIN)
     streams = parse_streams(STREAMS, domain)
@@ -92,17 +73,12 @@ def make(
     values = {o.name: o.name for o in problem.objects}
     states = [stream_contexts(p, domain, problem) for p in plans]
     fluents = frozenset({"at-conf", "visited"})
-    policy: Policy = (
-        LearnedPolicy(Guess(), plans, states, values, str, fluents, config or LearnedConfig())
-        if learned
-        else BaselinePolicy()
-    )
     search = TreeSearch(
         plans,
         states,
         values,
         runtime,
-        policy,
+        BaselinePolicy(),
         emitter=Emitter(run_id, sink) if sink is not None else None,
         encode=str,
         fluents=fluents,
@@ -155,26 +131,3 @@ def test_without_reuse_every_query_runs_its_sampler() -> None:
     search._query(first)
     search._query(second)
     assert len(motions) == 2
-
-
-@pytest.mark.parametrize("reuse_in_q", [True, False])
-def test_the_learned_policy_counts_a_result_it_will_reuse_at_its_execution_seconds(
-    reuse_in_q: bool,
-) -> None:
-    """reuse_in_q: once the motion is planned, the same motion from the other IK result will be
-    reused, so it costs only its 4 s of execution there; off, it still costs a query's seconds
-    (Eq. 1, a little lower now that the same query succeeded once)."""
-    search, _ = make(learned=True, config=LearnedConfig(reuse_in_q=reuse_in_q))
-    policy = search.policy
-    assert isinstance(policy, LearnedPolicy)
-    top = search._open_plan(0)
-    first, second = search._query(top), search._query(top)
-    policy.pick_plan(search.tree)
-    guessed = policy.q(search.tree, second)
-    assert guessed == pytest.approx(5.0 + 3.0 + 0.1 / 0.9 * 3.0)  # Eq. 1 for the motion
-    search._query(first)  # the motion is planned once: 4 s of execution
-    policy.pick_plan(search.tree)
-    if reuse_in_q:
-        assert policy.q(search.tree, second) == pytest.approx(4.0)  # no planning left, its 4 s
-    else:
-        assert 4.0 + 3.0 < policy.q(search.tree, second) < guessed  # planning still counts

@@ -47,8 +47,11 @@ ROOM: Mapping[str, int] = {"sample-placement": 1}  # streams with room features:
 ROOM_WIDTH = 3  # unknown, room (cm), blocks on the platform
 ROOM_CAP = 30.0  # centimetres: more room than this is plenty
 ROOM_GRID = 9  # candidate centres per side of the platform
+FACTS_READ_MAX = 4096  # facts lists whose reading is kept (a search has one per state)
 
 FloatArray = npt.NDArray[np.float32]
+# What a facts list sets (KitchenEncoder._read_facts): indices made 1, counts, (block, pose name).
+_FactsRead = tuple[npt.NDArray[np.intp], list[float], list[tuple[int, str]]]
 
 
 def _numbers(value: Any, n: int, where: str) -> list[float]:
@@ -75,6 +78,9 @@ class KitchenEncoder:
     conf_spill: bool = True  # the last arm joint where the shipped model saw it (docstring)
     _block_index: dict[str, int] = field(init=False, repr=False, compare=False)
     _platform_index: dict[str, int] = field(init=False, repr=False, compare=False)
+    _facts_read: dict[int, tuple[list[Any], _FactsRead]] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
 
     def __post_init__(self) -> None:
         if self.max_blocks < 1:
@@ -149,33 +155,60 @@ class KitchenEncoder:
         values = context.get("values", {})
         if not isinstance(facts, list) or not isinstance(values, Mapping):
             raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
+        ones, counts, poses = self._read_facts(facts)
+        out[offset + ones] = 1.0
+        n_platforms = len(self.platforms)
+        per_block = n_platforms + 6
+        for block, name in poses:
+            pose = values.get(name)
+            if isinstance(pose, Mapping) and _is_pose(pose):
+                x, y, _z, cos_yaw, sin_yaw = _pose_features(pose, f"context value {name}")
+                base = offset + block * per_block + 2 + n_platforms
+                out[base : base + 4] = [x, y, cos_yaw, sin_yaw]
+        tail = offset + self.max_blocks * per_block
+        out[tail : tail + len(self.counted)] = counts
+
+    def _read_facts(self, facts: list[Any]) -> _FactsRead:
+        """What ``facts`` set, apart from the poses' values: the state features they make 1
+        (present, on a platform, held), the blocks on each counted platform, and per block
+        with an ``at-pose`` fact, the name of its pose. A search's contexts share one facts list
+        per state (planner.search.queries), so each list is read once."""
+        cached = self._facts_read.get(id(facts))
+        if cached is not None and cached[0] is facts:
+            return cached[1]
         block_index, platform_index = self._block_index, self._platform_index
         n_platforms = len(self.platforms)
         per_block = n_platforms + 6
+        ones: set[int] = set()
         counts = dict.fromkeys(self.counted, 0)
+        poses: list[tuple[int, str]] = []
         for fact in facts:
             if not isinstance(fact, list) or not fact or not all(isinstance(a, str) for a in fact):
                 raise FeatureError(f"context: malformed fact {fact!r}")
             predicate, *args = fact
             for arg in args:
                 if arg in block_index:
-                    out[offset + block_index[arg] * per_block] = 1.0  # present
+                    ones.add(block_index[arg] * per_block)  # present
             if not args or args[0] not in block_index:
                 continue
-            base = offset + block_index[args[0]] * per_block
+            base = block_index[args[0]] * per_block
             if predicate == "on" and len(args) == 2 and args[1] in platform_index:
-                out[base + 1 + platform_index[args[1]]] = 1.0
+                ones.add(base + 1 + platform_index[args[1]])
                 if args[1] in counts:
                     counts[args[1]] += 1
             elif predicate == "holding":
-                out[base + 1 + n_platforms] = 1.0
+                ones.add(base + 1 + n_platforms)
             elif predicate == "at-pose" and len(args) == 2:
-                pose = values.get(args[1])
-                if isinstance(pose, Mapping) and _is_pose(pose):
-                    x, y, _z, cos_yaw, sin_yaw = _pose_features(pose, f"context value {args[1]}")
-                    out[base + 2 + n_platforms : base + per_block] = [x, y, cos_yaw, sin_yaw]
-        tail = offset + self.max_blocks * per_block
-        out[tail : tail + len(self.counted)] = [counts[p] for p in self.counted]
+                poses.append((block_index[args[0]], args[1]))
+        read: _FactsRead = (
+            np.array(sorted(ones), dtype=np.intp),
+            [float(counts[p]) for p in self.counted],
+            poses,
+        )
+        if len(self._facts_read) >= FACTS_READ_MAX:  # rows read from stored records: all new
+            self._facts_read.clear()
+        self._facts_read[id(facts)] = (facts, read)  # the list is kept: its id is not reused
+        return read
 
 
 class KitchenFeatures:
