@@ -431,6 +431,12 @@ CASES: dict[str, _Spec] = {
         _derived_bindings,
         _line_check,
     ),
+    "safe": _Spec(
+        (":derived", "forall and imply in a derived body", "derived precondition"),
+        LINE,
+        _derived_bindings,
+        _line_check,
+    ),
     "tower": _Spec(
         (":derived (recursive)", "or in a derived body", "derived goal"),
         {"a": Block("a"), "b": Block("b"), "c": Block("c")},
