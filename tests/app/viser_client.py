@@ -16,13 +16,15 @@ from contextlib import contextmanager
 import msgspec.msgpack
 import viser
 from viser import _messages  # the wire protocol's message classes
-from websockets.sync.client import ClientConnection, connect
+from websockets.sync.client import connect
+from websockets.sync.connection import Connection
+from websockets.typing import Subprotocol
 
 Vec3 = tuple[float, float, float]
 
 
 class ViserClient:
-    def __init__(self, ws: ClientConnection) -> None:
+    def __init__(self, ws: Connection) -> None:
         self._ws = ws
 
     def _send(self, message: _messages.Message) -> None:
@@ -63,7 +65,7 @@ def viser_client(url: str) -> Iterator[ViserClient]:
     ws_url = "ws" + url.removeprefix("http").rstrip("/") + "/"
     with connect(
         ws_url,
-        subprotocols=[f"viser-v{viser.__version__}"],  # type: ignore[list-item]
+        subprotocols=[Subprotocol(f"viser-v{viser.__version__}")],
         max_size=None,  # the scene is sent on connecting: tens of MB
         max_queue=None,  # keep reading it, so the server never waits on this client
         compression=None,
