@@ -883,8 +883,9 @@ let pickedCount = 0; // the ghost clicks already shown
 let pickedTimer = 0;
 
 /**
- * A ghost clicked in the 3D view names its node: the page says which and selects it in the
- * tree. The viewer keeps the last click (GET /api/viewer); the page asks while it shows a run.
+ * A ghost clicked in the 3D view names its node: the page says which and selects it (tree,
+ * inspector, and so the 3D view's highlight). The viewer keeps the last click (GET /api/viewer);
+ * the page asks while it shows a run.
  */
 async function pollPicked() {
   clearTimeout(pickedTimer);
@@ -914,6 +915,7 @@ function showPicked(picked) {
     app.selectedId = picked.node_id;
     renderInspector();
     view.requestDraw();
+    scheduleViewer(); // the 3D view highlights the page's selection, this one too
   }
 }
 

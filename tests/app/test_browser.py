@@ -23,6 +23,7 @@ from typing import Any
 import pytest
 
 from app.browser import CHROMIUM_ARGS, require_chromium
+from tests.app.viser_client import viser_client
 
 playwright_api = pytest.importorskip("playwright.sync_api")
 
@@ -504,7 +505,8 @@ def _improvement_words(paired: dict[str, Any]) -> str:
 def test_benchmark_compare_train_and_run_from_the_page(page: Any, server: Server) -> None:
     """The issue's "done when" on the tutorial's tiny domain: a benchmark of two planners
     launched from the page and watched, its scatter, a seed clicked and its two runs compared,
-    a model trained from the benchmark's baseline runs, and a run launched with it."""
+    a model trained from the benchmark's baseline runs, and a run launched with it; in the 3D
+    view, that run's node selected in the page and a ghost clicked selecting its node."""
     ARTIFACTS.mkdir(exist_ok=True)
     page.click("[data-testid=nav-benchmarks]")
     page.wait_for_function("document.querySelectorAll('#bench-scene option').length > 0")
@@ -592,6 +594,11 @@ def test_benchmark_compare_train_and_run_from_the_page(page: Any, server: Server
         assert cells[1] == str(q["queries"]) and cells[3] == str(q["failed"]), cells
     assert page.locator("#compare-curve .scatterlayer .trace").count() == 2
     page.screenshot(path=str(ARTIFACTS / "compare.png"), full_page=True)
+    # The view is shareable: its URL opened afresh draws the same two trees.
+    page.goto("about:blank")
+    page.goto(f"{server.url}/#compare={a},{b}")
+    page.wait_for_function("document.body.dataset.compare === 'drawn'", timeout=30_000)
+    assert page.evaluate("window.dashboard.compare()")["nodes"] == state["nodes"]
 
     # A model trained from the benchmark's baseline runs, with its validation figures.
     page.goto(f"{server.url}/#bench={bench_id}")
@@ -640,11 +647,35 @@ def test_benchmark_compare_train_and_run_from_the_page(page: Any, server: Server
         ):
             page.mouse.click(position["x"], position["y"])
         assert _state(page)["selected"] == leaf
-        deadline = time.monotonic() + 10
-        while server.api("/api/viewer")["node"] != leaf:
-            assert time.monotonic() < deadline
-            time.sleep(0.2)
+        _wait_viewer_node(server, leaf)
+
+        # A ghost clicked in the 3D view names its node: the page says which and selects it
+        # (tree, inspector, and the 3D view's highlight).
+        conf = next(
+            e
+            for e in events
+            if e["type"] == "node_added" and e["stream"] == "inverse-kinematics" and e["success"]
+        )
+        assert conf["node_id"] != leaf
+        picked = page.locator("[data-testid=viewer-picked]")
+        with viser_client(server.api("/api/health")["viewer_url"]) as viser:
+            viser.click("/search/confs", instance_index=0)  # the first configuration sampled
+            picked.wait_for(timeout=10_000)  # the page asks every 1.5 s
+        assert f"ghost of node #{conf['node_id']}" in picked.inner_text()
+        assert conf["label"] in picked.inner_text()
+        assert _state(page)["selected"] == conf["node_id"]
+        node = page.locator("[data-testid=inspector-node]").inner_text()
+        assert node.startswith(f"#{conf['node_id']} "), node
+        _wait_viewer_node(server, conf["node_id"])
     page.screenshot(path=str(ARTIFACTS / "run-with-model.png"), full_page=True)
+
+
+def _wait_viewer_node(server: Server, node_id: int) -> None:
+    """Until the 3D view shows ``node_id`` as the page's selection (10 s at most)."""
+    deadline = time.monotonic() + 10
+    while server.api("/api/viewer")["node"] != node_id:
+        assert time.monotonic() < deadline, server.api("/api/viewer")
+        time.sleep(0.2)
 
 
 def test_a_benchmark_cancelled_from_the_page_keeps_its_trials(page: Any, server: Server) -> None:

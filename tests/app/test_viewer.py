@@ -1,4 +1,5 @@
-"""The 3D view of a run (app/viewer.py): a real kitchen-1 run drawn in viser, and in a browser."""
+"""The 3D view of a run (app/viewer.py): a real kitchen-1 run drawn in viser, and in a browser;
+a ghost clicked through the dashboard's gate names its node to the page."""
 
 from __future__ import annotations
 
@@ -13,19 +14,26 @@ from typing import Any
 import imageio.v3 as iio
 import numpy as np
 import pytest
+from fastapi.testclient import TestClient
 
 from app.browser import CHROMIUM_ARGS, require_chromium
+from app.main import create_app
+from app.settings import Settings
 from app.viewer import NO_VIEW, RunViewer
 from app.viewer_search import NO_PREDICTION, SearchFold
 from planner.api import RunConfig, solve
 from planner.domains import problem_for_scene
 from planner.domains.kitchen.view import plan_timeline
 from planner.events import ListSink, ModelPrediction, NodeAdded, StreamQueried, event_to_dict
+from planner.experiment import Trial, run_trial
 from planner.plans import parse_plan
+from planner.store import RunStore
+from tests.app.viser_client import viser_client
 
 pytestmark = pytest.mark.slow
 
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
+TABLETOP = Path(__file__).resolve().parents[2] / "examples" / "tabletop2d"
 
 Events = list[dict[str, Any]]
 
@@ -440,3 +448,65 @@ def test_a_selected_tabletop_node_moves_the_gripper(viewer: RunViewer) -> None:
     early = events[: events.index(ik) - 1]
     viewer.show("tabletop-3", 1, early, None, domain=tutorial, focus=ik["node_id"])
     assert viewer.counts["focus_markers"] == 0 and viewer.focus_bodies == {}
+
+
+def _wait_picked(client: TestClient, count: int) -> dict[str, Any]:
+    """What GET /api/viewer says was clicked, once it has seen ``count`` clicks."""
+    deadline = time.monotonic() + 10
+    while True:
+        picked = client.get("/api/viewer").json()["picked"]
+        if picked is not None and picked["count"] >= count:
+            return dict(picked)
+        assert time.monotonic() < deadline, f"no click #{count} named after 10 s: {picked}"
+        time.sleep(0.05)
+
+
+def test_a_click_on_a_ghost_names_its_node_to_the_page(tmp_path: Path) -> None:
+    """viser reports clicks on scene nodes, not hovers (docs/viewer.md): a ghost clicked in the
+    dashboard's 3D view, sent as viser's browser client sends it through the dashboard's gate,
+    is the node GET /api/viewer names as ``picked`` (the page polls it to select the node)."""
+    db = tmp_path / "runs.db"
+    trial = Trial("tabletop-3", 0, "baseline", 60.0, domain=str(TABLETOP))
+    result = run_trial(trial, str(db))
+    assert result.status == "solved" and result.run_id is not None, result
+    with RunStore(db) as store:
+        events = [event_to_dict(e) for e in store.events(result.run_id)]
+    confs = [
+        n for n in _nodes(events).values() if n["stream"] == "inverse-kinematics" and n["success"]
+    ]
+    assert len(confs) >= 3
+    settings = Settings(
+        database_url=str(db),
+        viewer=True,
+        viewer_port=0,
+        reports_dir=tmp_path / "reports",
+        model_dir=tmp_path / "models",
+        extra_domains=[TABLETOP],
+    )
+    with TestClient(create_app(settings), base_url="http://127.0.0.1:8000") as client:
+        assert client.get("/api/viewer").json()["picked"] is None
+        client.put("/api/viewer", json={"run_id": result.run_id, "step": None}).raise_for_status()
+        view = client.app.state.dashboard.viewer.viewer  # type: ignore[attr-defined]
+        deadline = time.monotonic() + 30
+        while view.counts.get("confs") != len(confs):  # every configuration drawn as a ghost
+            assert time.monotonic() < deadline, view.counts
+            time.sleep(0.1)
+        url = client.get("/api/health").json()["viewer_url"]
+        with viser_client(url) as viser:
+            # The browser names the instance of the batch that was clicked ...
+            viser.click("/search/confs", instance_index=1)
+            picked = _wait_picked(client, 1)
+            assert picked == {
+                "node_id": confs[1]["node_id"],
+                "label": confs[1]["label"],
+                "count": 1,
+            }
+            # ... or only the ray: the ghost it passes nearest, here one straight below it.
+            xys = [tuple(c["outputs"][0]["xy"]) for c in confs]
+            later = zip(confs[2:], xys[2:], strict=True)  # not the ghost clicked before
+            below = next(c for c, xy in later if xys.count(xy) == 1)
+            x, y = below["outputs"][0]["xy"]
+            viser.click("/search/confs", ray_origin=(x, y, 1.0), ray_direction=(0.0, 0.0, -1.0))
+            picked = _wait_picked(client, 2)
+            assert (picked["node_id"], picked["count"]) == (below["node_id"], 2)
+        assert client.get("/api/viewer").json()["run_id"] == result.run_id
