@@ -1,9 +1,10 @@
 """Domains as plug-ins: found by folder path and through installed entry points, with an error
 naming the folder, file or entry point for every way one can be broken; a broken installed
-domain is reported and skipped, never fatal."""
+domain is reported (logged and listed) and skipped, never fatal."""
 
 from __future__ import annotations
 
+import logging
 import shutil
 import textwrap
 from collections.abc import Iterator
@@ -174,7 +175,9 @@ def test_installed_domains_register_by_entry_point(installed: Path) -> None:
     assert infos["tabletop2d"].error is None and infos["kitchen"].error is None
 
 
-def test_a_broken_installed_domain_never_stops_the_server(installed: Path, tmp_path: Path) -> None:
+def test_a_broken_installed_domain_never_stops_the_server(
+    installed: Path, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
     settings = Settings(
         database_url=str(tmp_path / "runs.db"), viewer=False, reports_dir=tmp_path / "reports"
     )
@@ -182,6 +185,14 @@ def test_a_broken_installed_domain_never_stops_the_server(installed: Path, tmp_p
         domains = {d["name"]: d for d in client.get("/api/domains").json()}
         assert domains["broken"]["loaded"] is False
         assert "numpyy" in domains["broken"]["error"]
+        # The server's log says which entry point was skipped and why, as a warning.
+        (skipped,) = {
+            r.getMessage()
+            for r in caplog.records
+            if r.levelno == logging.WARNING and "is skipped" in r.getMessage()
+        }
+        assert "entry point broken = broken_pkg:DOMAIN" in skipped
+        assert "ModuleNotFoundError: No module named 'numpyy'" in skipped
         assert domains["tabletop2d"]["loaded"] and domains["tabletop2d"]["scenes"] == 5
         scenes = {s["name"]: s["domain"] for s in client.get("/api/scenes").json()}
         assert scenes["kitchen-1"] == "kitchen" and scenes["tabletop-1"] == "tabletop2d"
