@@ -1,6 +1,7 @@
-"""Domains as plug-ins: found by folder path and through installed entry points, with an error
-naming the folder, file or entry point for every way one can be broken; a broken installed
-domain is reported (logged and listed) and skipped, never fatal."""
+"""Domains as plug-ins: found by folder path, through installed entry points and through the
+folders in TAMP_DOMAINS, with an error naming the folder, file or entry point for every way one
+can be broken; a broken installed domain is reported (logged and listed) and skipped, never
+fatal."""
 
 from __future__ import annotations
 
@@ -16,12 +17,14 @@ from fastapi.testclient import TestClient
 
 from app.main import create_app
 from app.settings import Settings
+from planner.cli import main
 from planner.domains import (
     DomainLoadError,
     domain_infos,
     known_domains,
     load_domain,
     problem_for_scene,
+    registry,
 )
 from planner.scene import SceneError
 from planner.values import ValueCodec, ValueDecodeError, ValueType, ValueTypeError
@@ -132,6 +135,24 @@ def test_values_round_trip_and_unknown_ones_are_stored_as_text(
         ValueDecodeError, match=r"values\.q\.type: unknown value type 'pose' \(known: none\)"
     ):
         codec.decode({"type": "pose"}, "values.q")
+
+
+def test_a_folder_in_tamp_domains_is_found_by_its_domain_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = _copy(tmp_path)  # the folder is "mine"; its domain is called tabletop2d
+    monkeypatch.delenv("TAMP_DOMAINS", raising=False)
+    monkeypatch.setattr(registry, "_extra_folders", [])  # none added by earlier servers
+    assert "tabletop2d" not in known_domains()
+    monkeypatch.setenv("TAMP_DOMAINS", str(folder))
+    loaded = load_domain("tabletop2d")
+    assert loaded.directory == folder.resolve() and loaded.source == f"folder {folder.resolve()}"
+    found, problem = problem_for_scene("tabletop-3")  # a scene of its scenes/, by name
+    assert found.directory == folder.resolve() and problem.domain_name == "tabletop2d"
+    assert main(["domains"]) == 0
+    listed = capsys.readouterr().out.splitlines()
+    at = next(i for i, line in enumerate(listed) if line.startswith("tabletop2d "))
+    assert f"folder {folder.resolve()}" in listed[at] and str(folder.resolve()) in listed[at + 1]
 
 
 # --- installed domains (entry points) --------------------------------------------------------
