@@ -592,6 +592,7 @@ class BatchingSink:
         self._stop = threading.Event()
         self._wake = threading.Event()  # a full or stale batch for the writer thread
         self._timer: threading.Thread | None = None
+        self.writer_cpu_s = 0.0  # CPU seconds the writer thread spent writing batches
         if flush_interval_s is not None:
             self._timer = threading.Thread(target=self._flush_periodically, name=name, daemon=True)
             self._timer.start()
@@ -663,11 +664,14 @@ class BatchingSink:
             with self._lock:
                 ready = len(self._buffer) >= self.batch_size or self._stale(time.perf_counter())
             if ready:
+                cpu = time.thread_time()
                 try:
                     self.flush()
                 except Exception:
                     log.exception("%r: writing events failed; will retry", self)
                     self._stop.wait(self.flush_interval_s / 2)  # not at once: it just failed
+                finally:
+                    self.writer_cpu_s += time.thread_time() - cpu
 
 
 class Emitter:

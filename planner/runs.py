@@ -87,6 +87,7 @@ class RecordedRun:
     message: str
     plan: dict[str, Any] | None  # the bound plan file when solved
     record_s: float  # seconds the planner spent handing events to the store
+    writer_cpu_s: float = 0.0  # CPU seconds the store's writer thread spent beside the planner
 
 
 def record_run(
@@ -132,7 +133,10 @@ def record_run(
         message=message,
         plan=plan,
     )
-    return RecordedRun(result, loaded, problem, status, valid, message, plan, sink.primary_s)
+    writer = sink.primary.writer_cpu_s if isinstance(sink.primary, StoreSink) else 0.0
+    return RecordedRun(
+        result, loaded, problem, status, valid, message, plan, sink.primary_s, writer
+    )
 
 
 class _Tee:

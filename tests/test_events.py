@@ -310,3 +310,32 @@ def test_numpy_floats_become_plain_floats_and_numpy_ints_are_refused() -> None:
     assert event_from_json(event_to_json(event)) == event
     with pytest.raises(ValueError, match=r"node_visited\.node_id: expected int, got int64"):
         NodeVisited(RUN, 0, 0.0, node_id=np.int64(1), visits=1, value=0.0)
+
+
+def test_a_batching_sinks_writer_thread_counts_the_cpu_it_spends() -> None:
+    """What recording costs a run beside the planner's thread (benchmarks/store_backends.py):
+    full batches are written by the writer thread, and the CPU seconds it spends are counted;
+    the planner's thread writes none of them."""
+    import threading
+    import time
+
+    writers: list[str] = []
+    written: list[events.Event] = []
+
+    def write(batch: list[events.Event]) -> None:
+        writers.append(threading.current_thread().name)
+        written.extend(batch)
+        end = time.thread_time() + 0.02  # a commit that costs 20 ms of CPU
+        while time.thread_time() < end:
+            pass
+
+    sink = events.BatchingSink(write, name="writer", batch_size=5, flush_interval_s=0.2)
+    emitter = events.Emitter("r", sink)
+    for i in range(10):
+        emitter.emit(events.NodeVisited, node_id=i, visits=1, value=0.0)
+    deadline = time.monotonic() + 5
+    while len(written) < 10 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    sink.close()
+    assert len(written) == 10 and writers and set(writers) == {"writer"}
+    assert sink.writer_cpu_s >= 0.018 * len(writers)

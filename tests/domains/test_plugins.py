@@ -1,9 +1,11 @@
-"""Domains as plug-ins: found by folder path and through installed entry points, with an error
-naming the folder, file or entry point for every way one can be broken; a broken installed
-domain is reported and skipped, never fatal."""
+"""Domains as plug-ins: found by folder path, through installed entry points and through the
+folders in TAMP_DOMAINS, with an error naming the folder, file or entry point for every way one
+can be broken; a broken installed domain is reported (logged and listed) and skipped, never
+fatal."""
 
 from __future__ import annotations
 
+import logging
 import shutil
 import textwrap
 from collections.abc import Iterator
@@ -15,12 +17,14 @@ from fastapi.testclient import TestClient
 
 from app.main import create_app
 from app.settings import Settings
+from planner.cli import main
 from planner.domains import (
     DomainLoadError,
     domain_infos,
     known_domains,
     load_domain,
     problem_for_scene,
+    registry,
 )
 from planner.scene import SceneError
 from planner.values import ValueCodec, ValueDecodeError, ValueType, ValueTypeError
@@ -133,6 +137,24 @@ def test_values_round_trip_and_unknown_ones_are_stored_as_text(
         codec.decode({"type": "pose"}, "values.q")
 
 
+def test_a_folder_in_tamp_domains_is_found_by_its_domain_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = _copy(tmp_path)  # the folder is "mine"; its domain is called tabletop2d
+    monkeypatch.delenv("TAMP_DOMAINS", raising=False)
+    monkeypatch.setattr(registry, "_extra_folders", [])  # none added by earlier servers
+    assert "tabletop2d" not in known_domains()
+    monkeypatch.setenv("TAMP_DOMAINS", str(folder))
+    loaded = load_domain("tabletop2d")
+    assert loaded.directory == folder.resolve() and loaded.source == f"folder {folder.resolve()}"
+    found, problem = problem_for_scene("tabletop-3")  # a scene of its scenes/, by name
+    assert found.directory == folder.resolve() and problem.domain_name == "tabletop2d"
+    assert main(["domains"]) == 0
+    listed = capsys.readouterr().out.splitlines()
+    at = next(i for i, line in enumerate(listed) if line.startswith("tabletop2d "))
+    assert f"folder {folder.resolve()}" in listed[at] and str(folder.resolve()) in listed[at + 1]
+
+
 # --- installed domains (entry points) --------------------------------------------------------
 
 
@@ -174,7 +196,9 @@ def test_installed_domains_register_by_entry_point(installed: Path) -> None:
     assert infos["tabletop2d"].error is None and infos["kitchen"].error is None
 
 
-def test_a_broken_installed_domain_never_stops_the_server(installed: Path, tmp_path: Path) -> None:
+def test_a_broken_installed_domain_never_stops_the_server(
+    installed: Path, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
     settings = Settings(
         database_url=str(tmp_path / "runs.db"), viewer=False, reports_dir=tmp_path / "reports"
     )
@@ -182,6 +206,14 @@ def test_a_broken_installed_domain_never_stops_the_server(installed: Path, tmp_p
         domains = {d["name"]: d for d in client.get("/api/domains").json()}
         assert domains["broken"]["loaded"] is False
         assert "numpyy" in domains["broken"]["error"]
+        # The server's log says which entry point was skipped and why, as a warning.
+        (skipped,) = {
+            r.getMessage()
+            for r in caplog.records
+            if r.levelno == logging.WARNING and "is skipped" in r.getMessage()
+        }
+        assert "entry point broken = broken_pkg:DOMAIN" in skipped
+        assert "ModuleNotFoundError: No module named 'numpyy'" in skipped
         assert domains["tabletop2d"]["loaded"] and domains["tabletop2d"]["scenes"] == 5
         scenes = {s["name"]: s["domain"] for s in client.get("/api/scenes").json()}
         assert scenes["kitchen-1"] == "kitchen" and scenes["tabletop-1"] == "tabletop2d"
