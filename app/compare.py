@@ -28,12 +28,13 @@ import numpy as np
 from planner.report import query_summary, run_time_split
 from planner.store import LIVE_STATUSES, QueryOutcome, RunRecord, RunStore
 
+# The events a tree is read from; the queries' times come from their rows
+# (RunStore.query_times), so the queries' events, half a tree's bytes, are not parsed.
 TREE_TYPES = (
     "abstract_plans_found",
     "node_added",
     "model_prediction",
     "solution_found",
-    "stream_queried",
 )
 MAX_CURVE_POINTS = 1000  # points of a run's queries-against-seconds curve
 KEPT_TREES = 8  # finished runs' trees kept in memory
@@ -79,7 +80,7 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
     q: dict[int, float] = {}
     solution: int | None = None
     plan_list: list[dict[str, Any]] = []
-    query_t: list[float] = []
+    query_t = store.query_times(run_id)
     plans_t: float | None = None
     root, root_label = 0, "root"  # the search does not announce its root; a test may
     for e in events:
@@ -97,9 +98,6 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
             labels.append(str(e.get("label", "")))
         elif kind == "model_prediction":
             q[int(e["node_id"])] = float(e["q"])
-        elif kind == "stream_queried":
-            if e.get("reused_from") is None:
-                query_t.append(float(e["t"]))
         elif kind == "solution_found":
             solution = int(e["node_id"])
         elif kind == "abstract_plans_found" and plans_t is None:

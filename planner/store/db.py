@@ -667,6 +667,20 @@ class RunStore:
                 out.append(data)
         return out
 
+    def query_times(self, run_id: str) -> list[float]:
+        """The time ``t`` of each of the run's stream queries a sampler answered (reused
+        results left out), in order: read from the queries' rows, without their events'
+        payloads (half a tree's stored bytes)."""
+        query = (
+            select(EventRow.t)
+            .join(QueryRow, (QueryRow.run_id == EventRow.run_id) & (QueryRow.seq == EventRow.seq))
+            .where(EventRow.run_id == run_id)
+            .order_by(EventRow.seq)
+        )
+        with self.engine.connect() as conn:
+            self._require(conn, run_id)
+            return [float(t) for (t,) in conn.execute(query)]
+
     def last_seq(self, run_id: str) -> int:
         """The highest stored seq of the run, -1 if it has no events."""
         with self.engine.connect() as conn:
