@@ -3,7 +3,7 @@
     from planner.api import plan
 
     result = plan("examples/tabletop2d/scenes/tabletop-3.json", planner="baseline", seed=0)
-    print(result.status, result.planning_s, result.check)
+    print(result.status, result.planning_s, result.valid, result.message)
     for action in result.actions:
         print(action)
 

@@ -16,7 +16,7 @@ import math
 import random
 from collections.abc import Iterator, Mapping
 
-from planner.pddl.structs import Problem
+from planner.pddl import Problem
 from planner.streams import (
     Failure,
     StreamAdapter,

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
+from planner.pddl import Atom, Domain, Literal, Problem, TypedName
 from planner.scene import Scene, check_name, goal_atoms
 
 from .values import Conf2D, Pose2D

@@ -11,9 +11,9 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from planner.abstract.skeleton import GroundAction
+from planner.abstract import GroundAction
 from planner.domains import PlanCheck
-from planner.pddl.structs import Problem
+from planner.pddl import Problem
 
 from .scene import START_CONF, overlap, start_pose_name, tabletop
 from .values import Conf2D, Grasp2D, Path2D, Pose2D

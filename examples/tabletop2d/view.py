@@ -8,8 +8,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from planner.abstract.skeleton import GroundAction
-from planner.pddl.structs import Problem
+from planner.abstract import GroundAction
+from planner.pddl import Problem
 from planner.view import (
     Body,
     BodyState,
