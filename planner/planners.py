@@ -155,12 +155,13 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
     state: the k plans share most of them (kitchen-4: 500 distinct of 1,826 rows, kitchen-8:
     819 of 3,600), and each distinct row is built and predicted once."""
     keys: dict[tuple[Any, frozenset[Atom]], int] = {}
+    fluents = task.fluents
     spans: list[list[int]] = []
     rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
     for plan, plan_states in zip(task.plans, task.states, strict=True):
         span = []
         for i, inst in enumerate(plan.stream_plan):
-            key = (inst, frozenset(a for a in plan_states[i] if a.predicate in task.fluents))
+            key = (inst, frozenset(a for a in plan_states[i] if a.predicate in fluents))
             if key not in keys:
                 keys[key] = len(rows)
                 rows += stream_rows(
@@ -168,7 +169,7 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
                     plan_states,
                     task.initial,
                     encode=task.loaded.encode,
-                    fluents=task.fluents,
+                    fluents=fluents,
                     static_context=task.static_context,
                     start=i,
                     only=(i,),

@@ -9,6 +9,7 @@ literal conjuncts of its precondition apart (``preconditions``) from the others
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Literal as TypingLiteral
@@ -506,9 +507,10 @@ class Domain:
     def derived_predicates(self) -> frozenset[str]:
         return frozenset(d.name for d in self.derived)
 
-    @property
+    @functools.cached_property
     def fluent_predicates(self) -> frozenset[str]:
-        """Predicates some action changes (conditional effects included)."""
+        """Predicates some action changes (conditional effects included); computed once (the
+        search and the model's stream order ask for it for every fact they read)."""
         out: set[str] = set()
         for a in self.actions:
             out.update(x.predicate for x in a.add_effects + a.del_effects)
