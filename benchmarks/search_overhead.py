@@ -104,7 +104,7 @@ def main() -> int:
         last_spent, last_nodes = 0.0, 0
         print(f"{args.planner} on a stuck tabletop search ({'model' if args.model else 'priors'})")
         while marks and time.perf_counter() < deadline:
-            out = search.run(deadline=min(deadline, time.perf_counter() + 2.0))
+            out = search.run(deadline=min(deadline, time.perf_counter() + 0.25))
             nodes = len(search.tree)
             while marks and nodes >= marks[0]:
                 per = (policy.spent - last_spent) / max(nodes - last_nodes, 1)

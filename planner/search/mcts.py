@@ -187,6 +187,7 @@ class TreeSearch:
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
         self._last_progress = 0.0
+        self._plans_open = 0  # stream plans given a node under the root so far
 
     # --- events ------------------------------------------------------------------------------
 
@@ -225,6 +226,7 @@ class TreeSearch:
 
     def _open_plan(self, index: int) -> Node:
         node = self.tree.add(ROOT, plan_index=index, depth=0, success=True)
+        self._plans_open += 1
         self._added(node)
         return node
 
@@ -332,12 +334,12 @@ class TreeSearch:
     # --- the loop ----------------------------------------------------------------------------
 
     def run(self, *, deadline: float, start: float | None = None) -> SearchResult:
-        """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, or stop."""
+        """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, or stop. A
+        second call goes on with the same tree (no stream plan is opened twice)."""
         start = time.perf_counter() if start is None else start
-        plans_added = 0
-        for _ in range(min(self.policy.initial_plans(len(self.skeletons)), len(self.skeletons))):
-            self._open_plan(plans_added)
-            plans_added += 1
+        first = min(self.policy.initial_plans(len(self.skeletons)), len(self.skeletons))
+        while self._plans_open < first:
+            self._open_plan(self._plans_open)
         iterations = 0
         status: Status = "timeout"
         solution: Node | None = None
@@ -350,9 +352,8 @@ class TreeSearch:
                 break
             iterations += 1
             tree = self.tree
-            if self.policy.add_plan(tree, plans_added, len(self.skeletons)):
-                node = self._open_plan(plans_added)
-                plans_added += 1
+            if self.policy.add_plan(tree, self._plans_open, len(self.skeletons)):
+                node = self._open_plan(self._plans_open)
             else:
                 node = self.policy.pick_plan(tree)
             made = len(tree.nodes)

@@ -63,6 +63,19 @@ def test_budget_ends_the_search() -> None:
     assert result.status == "timeout" and not result.solved
 
 
+def test_a_search_run_again_goes_on_with_its_tree() -> None:
+    """Run in slices (as a caller that reports between them does), a search keeps one node per
+    stream plan under the root: the second slice goes on with the first one's tree."""
+    ts = search(3)
+    for _ in range(3):
+        ts.run(deadline=time.perf_counter() + 0.01)
+    plans = [ts.tree[c].plan_index for c in ts.tree[0].children]
+    assert len(plans) == len(set(plans)) and set(plans) <= set(range(len(ts.skeletons)))
+    result = ts.run(deadline=time.perf_counter() + 30)
+    assert result.solved
+    assert len(ts.tree[0].children) == len({ts.tree[c].plan_index for c in ts.tree[0].children})
+
+
 def _shape(ts: TreeSearch) -> list[list[object]]:
     return [
         [n.id, n.parent, n.plan_index, n.depth, n.success, n.visits, round(n.value, 6)]
