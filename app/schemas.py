@@ -324,7 +324,7 @@ PlannerSpecName = Annotated[
         pattern=r"^[a-z]+(:[a-z_]+=[A-Za-z0-9_.+-]+)*$",
         max_length=200,
         description="a planner (baseline, paper, learned, sequential) or a variant such as "
-        "learned:shared_culprits=off",
+        "learned:dead_ends=off",
         examples=["baseline", "learned:dead_ends=off"],
     ),
 ]

@@ -103,7 +103,7 @@ def make_config(
     if not names or unknown:
         raise BenchError(
             f"unknown planner(s) {', '.join(unknown) or '(none given)'} "
-            f"(known: {', '.join(PLANNERS)}, or variants such as learned:shared_culprits=off)"
+            f"(known: {', '.join(PLANNERS)}, or variants such as learned:dead_ends=off)"
         )
     if len(set(names)) != len(names):
         raise BenchError(f"a planner is listed twice: {', '.join(names)}")

@@ -85,8 +85,7 @@ def _planner(text: str) -> str:
 
 
 PLANNER_HELP = (
-    f"a planner ({', '.join(PLANNERS)}) or a variant such as learned:shared_culprits=off "
-    "(docs/search.md)"
+    f"a planner ({', '.join(PLANNERS)}) or a variant such as learned:dead_ends=off (docs/search.md)"
 )
 
 
@@ -200,8 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument(
         "--planners",
         default="baseline,learned",
-        help="comma-separated planners or variants: baseline,paper,learned,"
-        "learned:shared_culprits=off",
+        help="comma-separated planners or variants: baseline,paper,learned,learned:dead_ends=off",
     )
     be.add_argument("--trials", type=int, default=20, help="seeds (default 20)")
     be.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")

@@ -12,7 +12,7 @@ events. One registry (:data:`PLANNERS`, :func:`get_planner`), as the top-k backe
 A learned planner uses the domain's trained model, or, without one, per-stream priors (success
 rates and mean costs of recorded queries, or uniform figures), which it says in one warning
 line. A **variant** changes parts of ``paper`` or ``learned`` by name:
-``learned:shared_culprits=off``, ``paper:dead_ends=on:c_explore=0.1`` (:func:`get_planner`).
+``learned:dead_ends=off``, ``paper:dead_ends=on:c_explore=0.1`` (:func:`get_planner`).
 
 A planner gets a :class:`PlanningTask` (the problem, its abstract plans, the stream runtime) and
 returns a :class:`PlannerOutcome`; :func:`planner.api.solve` does the rest (top-k, events, the
@@ -450,7 +450,7 @@ def _trajectories(bound: BoundPlan) -> list[Any]:
 class PlannerSpec:
     """A planner by name, with a learned planner's parts; call it with a run's config."""
 
-    name: str  # as given: "learned:shared_culprits=off"
+    name: str  # as given: "learned:dead_ends=off"
     kind: type[Planner]
     parts: LearnedConfig | None = None  # the learned planners' configuration
 

@@ -33,13 +33,11 @@ class ModelPredictor:
         out: list[StreamCost | None] = [None] * len(rows)
         for stream, indices in by_stream.items():
             pred = self.model.predict_queries(stream, [(rows[i][1], rows[i][2]) for i in indices])
-            base = self.model.prior(stream).p_s
             for j, i in enumerate(indices):
                 out[i] = StreamCost(
                     float(pred.p_s[j]),
                     float(pred.r_s[j]),
                     float(pred.r_f[j]),
                     float(pred.r_m[j]),
-                    p_prior=base,
                 )
         return [c for c in out if c is not None]

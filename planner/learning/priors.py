@@ -142,5 +142,5 @@ class PriorPredictor:
         out = []
         for stream, _, _ in rows:
             p = self.prior(stream)
-            out.append(StreamCost(p.p_s, p.r_s, p.r_f, p.r_m, p_prior=p.p_s))
+            out.append(StreamCost(p.p_s, p.r_s, p.r_f, p.r_m))
         return out

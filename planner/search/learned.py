@@ -9,8 +9,8 @@ Q), so there is no progressive-widening rule; the stream plans keep their own or
 
 **The additions** (planner ``learned``, :class:`LearnedConfig`'s defaults): each is one field of
 :class:`LearnedConfig`, switched off by name (``tamp bench --planners
-learned,learned:shared_culprits=off``); its docstring says what it does and what it measured.
-What failed queries teach (dead ends, shared culprits) lives in :mod:`planner.search.evidence`.
+learned,learned:dead_ends=off``); its docstring says what it does and what it measured.
+What failed queries teach (dead ends) lives in :mod:`planner.search.evidence`.
 The models are reached through the :class:`Predictor` protocol, so this module needs no torch.
 
 A node's Q is predicted once, when it is made (only the rows its binding changed are predicted
@@ -33,9 +33,8 @@ from planner.search.costs import (
     DEAD_END_MAX,
     StreamCost,
     dead_after,
-    dead_end_chance,
+    dead_end_cost,
     remaining_cost,
-    with_dead_ends,
 )
 from planner.search.evidence import Evidence
 from planner.search.queries import query_context
@@ -48,10 +47,10 @@ __all__ = [
     "Predictor",
     "StreamCost",
     "dead_after",
+    "dead_end_cost",
     "remaining_cost",
     "row_names",
     "stream_rows",
-    "with_dead_ends",
 ]
 
 Row = tuple[str, list[Any | None], dict[str, Any]]  # stream, encoded inputs, context
@@ -115,15 +114,6 @@ class LearnedConfig:
     c_explore: float = 0.05
     """UCT exploration weight on values normalised to (0, 1] by the best plan's Q."""
 
-    dead_end_prior: bool = True
-    """A prediction below the stream's usual success rate is read as a chance that the query
-    is a dead end (the part of the failure beyond chance: a crowded region, a pose out of
-    reach); Eq. 4 is then paid 1 / (chance the rest is feasible) times, and such a query is
-    taken for a dead end after fewer failures.
-
-    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: planning 47% more
-    without it (8% to 109% more); kitchen-4 6% less (34% less to 26% more)."""
-
     dead_ends: bool = True
     """A node whose next query failed (or led only to dead ends) more often than its
     prediction explains is a dead end: it and its ancestors up to the one that bound something
@@ -133,16 +123,6 @@ class LearnedConfig:
     Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: without it
     planning 335% more (194% to 522% more) with 5 timeouts in 40; on kitchen-4 85% more (11% less
     to 231% more) with 1 timeout in 10."""
-
-    shared_culprits: bool = True
-    """A query that keeps failing while a later choice it depends on varies is blamed on the
-    earlier choices every failure shared (needs dead_ends): otherwise each failure has its own
-    identity and nothing pools them, and the search re-samples the choice nearest the
-    failure for ever.
-
-    Measured (off against on, paired, docs/BENCHMARKS.md): costs on tabletop-4: planning 39% less
-    without it (22% to 49% less); kitchen-4 85% more without it (10% less to 236% more), with 1
-    timeout in 10 that every other variant solves."""
 
     subtree_min: bool = True
     """A node is estimated by the lowest Q in its subtree, dead ends left out (progress along
@@ -243,14 +223,7 @@ class LearnedPolicy:
     def __post_init__(self) -> None:
         c = self.config
         self.encode = _remembered(self.encode)
-        self._evidence = Evidence(
-            _Queries(self),
-            self.encode,
-            self.initial_values,
-            dead_ends=c.dead_ends,
-            shared_culprits=c.shared_culprits,
-            use_prior=c.dead_end_prior,
-        )
+        self._evidence = Evidence(_Queries(self), dead_ends=c.dead_ends)
 
     @property
     def evidence(self) -> Evidence:
@@ -330,18 +303,9 @@ class LearnedPolicy:
         for node in todo:
             entries = [costs[s] if isinstance(s, int) else s for s in slots[node.id]]
             self._entries[node.id] = entries
-            self._q[node.id] = self._eq4(entries)
+            self._q[node.id] = remaining_cost(entries)
             if entries and self.on_prediction is not None:
                 self.on_prediction(node, entries[0], self._q[node.id])
-
-    def _eq4(self, costs: Sequence[StreamCost]) -> float:
-        """Eq. 4 over ``costs``; with dead_end_prior, paid once more for each time the rest is
-        expected to turn out a dead end (:func:`~planner.search.costs.with_dead_ends`)."""
-        total = remaining_cost(costs)
-        if not self.config.dead_end_prior:
-            return total
-        feasible = math.prod(1.0 - dead_end_chance(c) for c in costs)
-        return with_dead_ends(total, feasible)
 
     def q(self, tree: Tree, node: Node) -> float:
         """Expected seconds still to spend on ``node``'s plan: Eq. 4 over the predictions of its
@@ -388,8 +352,8 @@ class LearnedPolicy:
                 continue
             old = est.get(node.id)
             best = self.q(tree, node)
-            if node.id in dead:  # every continuation is taken to fail: going on costs 1 / 0.05 x
-                best = with_dead_ends(best, 0.0)
+            if node.id in dead:  # every continuation is taken to fail
+                best = dead_end_cost(best)
             elif self.config.subtree_min:
                 for c in node.children:  # a dead end's subtree no longer vouches for its parent
                     if c in est and c not in dead and est[c] < best:

@@ -8,8 +8,6 @@ import shutil
 import time
 from pathlib import Path
 
-import pytest
-
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.domains import problem_for_scene
 from planner.learning.priors import PriorPredictor
@@ -50,21 +48,12 @@ def stuck_search(folder: Path, config: LearnedConfig) -> tuple[TreeSearch, Learn
     return search, policy
 
 
-@pytest.mark.parametrize("shared", [True, False])
-def test_dead_ends_found_step_by_step_are_those_of_the_whole_tree(
-    tmp_path: Path, shared: bool
-) -> None:
-    config = LearnedConfig(shared_culprits=shared)
-    search, policy = stuck_search(tmp_path / "tabletop2d", config)
+def test_dead_ends_found_step_by_step_are_those_of_the_whole_tree(tmp_path: Path) -> None:
+    search, policy = stuck_search(tmp_path / "tabletop2d", LearnedConfig())
     # The policy refreshes at every iteration: thousands of small steps.
     assert search.run(deadline=time.perf_counter() + 3.0).status == "timeout"
     policy.pick_plan(search.tree)  # a last refresh: the nodes of the last iteration
     assert len(search.tree) > 1000 and len(policy.dead) > 100
-    whole = Evidence(
-        policy.evidence.queries,
-        policy.encode,
-        policy.initial_values,
-        shared_culprits=shared,
-    )
+    whole = Evidence(policy.evidence.queries)
     whole.refresh(search.tree)
     assert whole.dead == policy.dead

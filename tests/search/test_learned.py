@@ -20,12 +20,10 @@ from planner.events import Emitter, ListSink, ModelPrediction
 from planner.search.binding import stream_contexts
 from planner.search.costs import P_FLOOR
 from planner.search.learned import (
-    DEAD_END_MAX,
     LearnedConfig,
     LearnedPolicy,
     StreamCost,
     remaining_cost,
-    with_dead_ends,
 )
 from planner.search.mcts import TreeSearch
 from planner.search.tree import ROOT
@@ -39,33 +37,6 @@ def test_equation_1_and_4() -> None:
     floored = StreamCost(0.0, 1.0, 2.0, 0.0).expected  # P_S as given, but never 0
     assert floored == pytest.approx(1 + (1 - P_FLOOR) / P_FLOOR * 2)
     assert remaining_cost([StreamCost(0.5, 1, 2, 3), StreamCost(1, 1, 5, 0)]) == pytest.approx(7)
-
-
-def test_dead_ends_scale_the_rest_of_the_plan() -> None:
-    """A prediction below the stream's usual success rate is a dead end in that part: with
-    chance F that the rest is feasible, Eq. 4's cost is paid 1 / F times."""
-    usual = StreamCost(0.6, 1.0, 1.0, 0.0, p_prior=0.6)
-    assert usual.dead_end == 0.0  # failing as often as usual is chance, not a dead end
-    assert StreamCost(0.9, 1.0, 1.0, 0.0, p_prior=0.6).dead_end == 0.0
-    crowded = StreamCost(0.15, 1.0, 1.0, 0.0, p_prior=0.6)
-    assert crowded.dead_end == pytest.approx(0.75)  # 1 - 0.15 / 0.6
-    assert StreamCost(0.0, 1.0, 1.0, 0.0, p_prior=0.6).dead_end == pytest.approx(DEAD_END_MAX)
-    assert StreamCost(0.1, 1.0, 1.0, 0.0).dead_end == 0.0  # no prior rate: Eq. 4 as it is
-    assert with_dead_ends(10.0, 0.25) == pytest.approx(40.0)
-    assert with_dead_ends(10.0, 0.0) == pytest.approx(10.0 / (1 - DEAD_END_MAX))
-    # The crowded stove: a placement that fails in milliseconds barely moves Eq. 4, so a branch
-    # whose last placement will not fit looks cheaper than one with a longer motion ...
-    crowded = [StreamCost(0.05, 0.001, 0.001, 0.0, p_prior=0.9), StreamCost(1.0, 1.0, 0.0, 0.0)]
-    clear = [StreamCost(0.9, 0.001, 0.001, 0.0, p_prior=0.9), StreamCost(1.0, 1.5, 0.0, 0.0)]
-    assert remaining_cost(crowded) < remaining_cost(clear)
-
-    def q(costs: list[StreamCost]) -> float:
-        feasible = 1.0
-        for c in costs:
-            feasible *= 1.0 - c.dead_end
-        return with_dead_ends(remaining_cost(costs), feasible)
-
-    assert q(crowded) > 5 * q(clear)  # ... and with dead ends it is the one to avoid
 
 
 class CountingPredictor:
@@ -264,25 +235,19 @@ def test_a_dead_end_blames_the_last_choice_it_depends_on(dead_ends: bool) -> Non
 
 
 class SureOracle(ReachOracle):
-    """Like :class:`ReachOracle`, but b's reach test is sure to pass (P_S 0.999), and its
-    stream usually passes 90% of the time; with ``doubt``, the model instead predicts 0.03 for
-    it (far below the usual rate: it foresees the failure)."""
-
-    def __init__(self, doubt: bool = False) -> None:
-        super().__init__()
-        self.doubt = doubt
+    """Like :class:`ReachOracle`, but b's reach test is sure to pass (P_S 0.999)."""
 
     def cost(
         self, stream: str, inputs: Sequence[Any | None], context: Mapping[str, Any]
     ) -> StreamCost:
         if stream == "test-reachable" and isinstance(inputs[1], float) and inputs[1] > 1.0:
-            return StreamCost(0.03 if self.doubt else 0.999, 0.01, 0.01, 0.0, p_prior=0.9)
+            return StreamCost(0.999, 0.01, 0.01, 0.0)
         return super().cost(stream, inputs, context)
 
 
-def _failing_b(config: LearnedConfig, doubt: bool, failures: int) -> tuple[LearnedPolicy, Any]:
+def _failing_b(config: LearnedConfig, failures: int) -> tuple[LearnedPolicy, Any]:
     """b's reach test at a pose of 1.5 fails ``failures`` times: (policy, the node making it)."""
-    search, policy = make(ListSink(), SureOracle(doubt), config)
+    search, policy = make(ListSink(), SureOracle(), config)
     tree = search.tree
     plan = search.skeletons[0]
     a_pose, b_pose = plan.stream_plan[1].outputs[0], plan.stream_plan[4].outputs[0]
@@ -299,114 +264,10 @@ def test_one_failure_is_never_a_dead_end() -> None:
     """However sure the model is, a node becomes a dead end only after failures in a row: one
     failed query predicted at 0.999 is chance (a try landing where a block stands), not a
     reason to throw a bound plan away; two are a dead end."""
-    policy, tester = _failing_b(LearnedConfig(), doubt=False, failures=1)
+    policy, tester = _failing_b(LearnedConfig(), failures=1)
     assert tester.id not in policy.dead
-    policy, tester = _failing_b(LearnedConfig(), doubt=False, failures=2)
+    policy, tester = _failing_b(LearnedConfig(), failures=2)
     assert tester.id in policy.dead
-
-
-@pytest.mark.parametrize("prior", [True, False])
-def test_a_failure_the_model_foresaw_is_a_dead_end_sooner(prior: bool) -> None:
-    """dead_end_prior: a query predicted far below its stream's usual rate (0.03 against 0.9)
-    is, to the model, likely a dead end, and failures confirm it: two make it one. Without the
-    prior, two failures are what 0.03 explains: the search goes on insisting (76 would be
-    needed)."""
-    config = LearnedConfig(dead_end_prior=prior)
-    policy, tester = _failing_b(config, doubt=True, failures=2)
-    assert (tester.id in policy.dead) is prior
-
-
-class CrowdedOracle(ReachOracle):
-    """Like :class:`ReachOracle`, but sampling a pose fails one time in five, in milliseconds
-    (as a placement on a crowded stove does), and a reach test takes a second (as a motion
-    does)."""
-
-    def predict_rows(
-        self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
-    ) -> list[StreamCost]:
-        out = super().predict_rows(rows)
-        return [
-            StreamCost(0.8, 0.001, 0.001, 0.0)
-            if stream == "sample-pose"
-            else StreamCost(cost.p_s, 1.0, 1.0, 0.0)
-            for (stream, _, _), cost in zip(rows, out, strict=True)
-        ]
-
-
-def crowded_search(
-    config: LearnedConfig | None = None,
-) -> tuple[TreeSearch, LearnedPolicy, str, Any]:
-    """A line search under :class:`CrowdedOracle`: (search, policy, a's pose object, the first
-    plan's node, added by hand)."""
-    search, policy = make(ListSink(), config=config)
-    policy.predictor = CrowdedOracle()
-    a_pose = search.skeletons[0].stream_plan[1].outputs[0]
-    top = search.tree.add(ROOT, plan_index=0, depth=0, success=True)
-    return search, policy, a_pose, top
-
-
-def shared_pose_tree(
-    b_poses: Sequence[float], config: LearnedConfig | None = None
-) -> tuple[LearnedPolicy, Any, Any, Any, list[Any]]:
-    """a placed at 2.0 once; below it, one branch per pose of b in ``b_poses``, each up to
-    b's reach test: (policy, tree, the node choosing a's pose, the node binding it, the nodes
-    making b's reach test)."""
-    search, policy = make(ListSink(), config=config)
-    tree = search.tree
-    plan = search.skeletons[0]
-    a_pose, b_pose = plan.stream_plan[1].outputs[0], plan.stream_plan[4].outputs[0]
-    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
-    choose_a = tree.add(top.id, plan_index=0, depth=1, success=True)
-    placed_a = tree.add(choose_a.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0})
-    reached_a = tree.add(placed_a.id, plan_index=0, depth=3, success=True)
-    choose_b = tree.add(reached_a.id, plan_index=0, depth=4, success=True)
-    testers = [
-        tree.add(choose_b.id, plan_index=0, depth=5, success=True, outputs={b_pose: x})
-        for x in b_poses
-    ]
-    for node in (top, choose_a, placed_a, reached_a, choose_b, *testers):
-        node.visits = 3
-    return policy, tree, choose_a, placed_a, testers
-
-
-@pytest.mark.parametrize("shared", [True, False])
-def test_a_query_failing_under_varied_later_choices_blames_the_earlier_ones_it_shares(
-    shared: bool,
-) -> None:
-    """b's reach test reads a's pose and b's. It fails once under each of three poses of b the
-    model takes for reachable: no single query failed twice, but every failure shared a's pose,
-    so a's pose is the dead end and the search samples a new one (kitchen-4 seed 1009 with 96
-    IK base poses: the last block's stove placement failed 99 times, each under a new place of
-    the block before it, while the first blocks' places that left no room were never
-    re-sampled). Without shared_culprits nothing blames a's pose."""
-    config = LearnedConfig(shared_culprits=shared)
-    policy, search_tree, choose_a, placed_a, testers = shared_pose_tree([1.5, 1.7, 1.9], config)
-    for node in testers[:2]:
-        search_tree.add(node.id, plan_index=0, depth=6, success=False)
-    policy.pick_plan(search_tree)
-    assert placed_a.id not in policy.dead  # twice could be the poses of b
-    assert not policy.expand(search_tree, choose_a)
-    search_tree.add(testers[2].id, plan_index=0, depth=6, success=False)
-    policy.pick_plan(search_tree)
-    if not shared:
-        assert placed_a.id not in policy.dead
-        assert not policy.expand(search_tree, choose_a)
-        return
-    assert placed_a.id in policy.dead and all(t.id in policy.dead for t in testers)
-    assert choose_a.id not in policy.dead  # the one to choose again
-    assert policy.expand(search_tree, choose_a)  # now: sample another pose for a
-
-
-def test_a_success_under_the_shared_choices_clears_them() -> None:
-    """The same failures, but one pose of b passed its test with a where it is: a's pose is not
-    what makes b's test fail, so it is not blamed."""
-    policy, tree, choose_a, placed_a, testers = shared_pose_tree([1.5, 1.7, 1.9, 0.5])
-    for node in testers[:3]:
-        tree.add(node.id, plan_index=0, depth=6, success=False)
-    tree.add(testers[3].id, plan_index=0, depth=6, success=True)
-    policy.pick_plan(tree)
-    assert placed_a.id not in policy.dead
-    assert not policy.expand(tree, choose_a)
 
 
 def test_every_node_a_rollout_makes_gets_a_prediction() -> None:
