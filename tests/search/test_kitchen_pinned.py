@@ -7,9 +7,10 @@ model shows up here; the PR2's and the kitchen's visual meshes (issue 32) do not
 Each run gets a fresh process, as a benchmark trial does: OMPL takes one random seed per
 process, so a second run in one process draws other motions. Motion searches stop after a
 number of iterations and their paths are shortened in counted steps, so a trial's motions, and
-its execution seconds, are the same on any machine at any load. The queries were recorded at
-e5923b3 (before domains became plug-ins); the execution seconds at 15f517c (before the visual
-meshes), and the same at 5b0ae6c.
+its execution seconds, are the same on any machine at any load. The baseline's queries were
+recorded at e5923b3 (before domains became plug-ins), its execution seconds at 15f517c (before
+the visual meshes); the learned trial was recorded again when the learned planner lost its
+dead_end_prior and shared_culprits parts (issue 29), which made it another trial.
 """
 
 from __future__ import annotations
