@@ -120,25 +120,28 @@ class LearnedConfig:
     the failures depend on are priced as if every continuation fails (backjumping), and a dead
     end counts as a failed attempt of its parent's query.
 
-    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: without it
-    planning 335% more (194% to 522% more) with 5 timeouts in 40; on kitchen-4 85% more (11% less
-    to 231% more) with 1 timeout in 10."""
+    Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4:
+    without it 8 timeouts in 40 and planning 1325% more (745% to 1931% more); kitchen-4, 30
+    seeds: 21% more (1% less to 59% more)."""
 
     subtree_min: bool = True
     """A node is estimated by the lowest Q in its subtree, dead ends left out (progress along
     a plan counts); off: by its own Q.
 
-    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4: planning 62% more
-    without it (15% to 142% more); kitchen-4 20% less (45% less to 20% more)."""
+    Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4:
+    planning 105% more without it (63% to 156% more); kitchen-4, 30 seeds: 6% more (4% less to
+    18% more)."""
 
     model_order: bool = True
     """Each stream plan is reordered before the search by the model's predictions: cheap tests
     likely to fail first, never before the streams whose outputs they read
     (planner/search/order.py); off: the plan's own order (``--order`` overrides either way).
 
-    Measured (off against on, paired, docs/BENCHMARKS.md): no measurable effect: planning 3% more
-    without it on tabletop-4 (27% less to 53% more), 50% more on kitchen-4 (22% less to 169%
-    more)."""
+    Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): kitchen-4, 30 seeds:
+    planning 12% more without it (3% less to 29% more), total 7% more (0% to 14% more);
+    tabletop-4: planning 5% more (7% less to 19% more). Not measurable alone on either; kept
+    until its kitchen-8 row is measured, where earlier ablations found the learned planner's
+    lead came from this order."""
 
     @classmethod
     def paper(cls) -> LearnedConfig:
