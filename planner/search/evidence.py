@@ -25,7 +25,7 @@ from typing import Protocol
 from planner.search.costs import StreamCost, dead_after
 from planner.search.tree import ROOT, Node, Tree
 
-_Source = tuple[str, int]  # ("own", node): the dead end its own failures make
+_Source = int  # a dead end's source: the node whose own failures make it
 
 
 class NodeQueries(Protocol):
@@ -108,7 +108,7 @@ class Evidence:
         ):
             below = self._below.get(node.id)
             reason = frozenset(self.queries.relevant(node)) | frozenset(below or ())
-        self._set_source(tree, ("own", node.id), node, reason)
+        self._set_source(tree, node.id, node, reason)
 
     # --- marks -------------------------------------------------------------------------------
 
