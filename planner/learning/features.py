@@ -51,6 +51,7 @@ __all__ = [
 FEATURE_VERSION = 3  # bump whenever a row's layout or meaning changes: old models must not load
 MAX_FACT_KEYS = 128  # FactFeatures: the most frequent fact patterns kept (the rest only counted)
 MAX_SEEN_FACTS = 100_000  # facts whose encoding a FactEncoder remembers (cleared beyond)
+MAX_SEEN_CONTEXTS = 4096  # contexts whose state part a Featurizer remembers (cleared beyond)
 
 FloatArray = npt.NDArray[np.float32]
 Context = Mapping[str, Any]  # {"facts": [[pred, *args], ...], "values": {name: JSON}, ...}
@@ -469,6 +470,9 @@ class Featurizer:
         self._spec = spec
         self._codec = codec
         self._state = state
+        # The state part of each context object featurized lately: a search's rows queried in
+        # one state share their context (planner.search.learned.stream_rows).
+        self._scene_parts: dict[int, tuple[Context, FloatArray]] = {}
         self._layouts = {layout.stream: layout for layout in spec.streams}
         self._name_index = {
             layout.stream: [{v: i for i, v in enumerate(s.vocabulary)} for s in layout.slots]
@@ -666,10 +670,23 @@ class Featurizer:
         if extra:
             out[offset : offset + extra] = self._state.stream_features(stream, inputs, context)
             offset += extra
-        self._state.scene_features(context, out, offset)
+        out[offset:] = self._scene_part(context)
         if layout is not None:
             self._state.finish_row(stream, inputs, out, self._slot_places[stream])
         return out
+
+    def _scene_part(self, context: Context) -> FloatArray:
+        """The state part of ``context``'s rows, computed once per context object (the object
+        is kept with it, so its id is not reused; contexts are read, never changed)."""
+        hit = self._scene_parts.get(id(context))
+        if hit is not None and hit[0] is context:
+            return hit[1]
+        part = np.zeros(self._state.scene_width, dtype=np.float32)
+        self._state.scene_features(context, part, 0)
+        if len(self._scene_parts) >= MAX_SEEN_CONTEXTS:
+            self._scene_parts.clear()
+        self._scene_parts[id(context)] = (context, part)
+        return part
 
     def matrix(
         self, stream: str, queries: Iterable[tuple[Sequence[Any | None], Context]]

@@ -41,6 +41,12 @@ HIDDEN = 64  # units in each of the two hidden layers
 MIN_SECONDS = 1e-6  # costs are floored here before taking logs (a grasp sample takes ~50 us)
 MAX_SECONDS = 1e6  # predicted costs are capped here (exp of a wild extrapolation)
 COST_HEADS = ("r_s", "r_f", "r_m")
+# Predictions run on one torch thread: a search's batches are tens to hundreds of rows through
+# 64-unit layers, too small to gain from intra-op threads, and on a machine whose cores are all
+# busy (a benchmark's workers, the dashboard) those threads wait on each other. Measured on a
+# kitchen-8 run beside a two-worker benchmark: 2.48 s of predictions with torch's default
+# threads, 0.35 s with one (same predictions, same run).
+INFERENCE_THREADS = 1
 
 Float64Array = npt.NDArray[np.float64]
 
@@ -178,7 +184,7 @@ class CostModel:
             )
         if len(x) == 0:
             return prior.predict(0)
-        with torch.inference_mode():
+        with torch.inference_mode(), torch_threads(INFERENCE_THREADS):
             out = network.net(torch.from_numpy(x)).double()
             log_costs = network.net.y_mean.double() + network.net.y_std.double() * out[:, 1:]
             p_s = torch.sigmoid(out[:, 0]).numpy()

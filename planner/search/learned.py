@@ -70,16 +70,21 @@ def stream_rows(
     """The model rows of ``plan``'s streams from ``start`` on (of those in ``only``, if
     given): stream, encoded inputs (None while unbound) and the query's context
     (:func:`planner.search.queries.query_context`), as the models were trained on them. A row
-    reads only the values of :func:`row_names`."""
+    reads only the values of :func:`row_names`. Rows queried in one state share one context
+    object (read it, do not change it): the featurizer computes a context's state part once."""
     rows = []
+    contexts: dict[int, dict[str, Any]] = {}  # per state object of the plan
     for i in range(start, len(plan.stream_plan)):
         if only is not None and i not in only:
             continue
         inst = plan.stream_plan[i]
         inputs = [encode(values[n]) if n in values else None for n in inst.inputs]
-        context = query_context(
-            states[i], values, fluents=fluents, static_context=static_context, encode=encode
-        )
+        context = contexts.get(id(states[i]))
+        if context is None:
+            context = query_context(
+                states[i], values, fluents=fluents, static_context=static_context, encode=encode
+            )
+            contexts[id(states[i])] = context
         rows.append((inst.stream, inputs, context))
     return rows
 

@@ -78,6 +78,26 @@ def test_the_state_part_counts_facts_and_carries_their_values(
         featurizer.row("test-cfree", crowded.inputs, {"facts": [["at", 3]], "values": {}})
 
 
+def test_rows_that_share_a_context_are_the_rows_of_each_query_alone(
+    records: LoadedRecords, tabletop: LoadedDomain
+) -> None:
+    """A search's rows queried in one state share their context object, whose state part the
+    featurizer computes once: each row is still the one its own query gives."""
+    featurizer = Featurizer.fit(records, domain=tabletop)
+    tests = [r for r in records if r.stream == "test-cfree"][:40]
+    contexts = {repr(r.context): r.context for r in tests}
+    assert len(contexts) >= 2  # queries in different states
+    # Every query's inputs against every context object, twice over, interleaved.
+    queries = [(r.inputs, c) for c in contexts.values() for r in tests[:5]] * 2
+    together = featurizer.matrix("test-cfree", queries)
+    for row, (inputs, context) in zip(together, queries, strict=True):
+        alone = Featurizer.fit(records, domain=tabletop).row(
+            "test-cfree", inputs, {**context, "facts": list(context["facts"])}
+        )
+        assert row.tolist() == alone.tolist()
+    assert len({tuple(r) for r in together}) > len(tests[:5])  # the contexts differ in rows
+
+
 def test_a_model_trains_saves_and_loads_for_the_tutorial(
     records: LoadedRecords, tabletop: LoadedDomain, tmp_path: Path
 ) -> None:
