@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
 import sys
@@ -109,6 +110,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 dashboard_port=settings.port,
             )
         app.state.dashboard = Dashboard(settings, viewer=viewer, viewer_gate=gate)
+        await asyncio.to_thread(app.state.dashboard.warm_up)
         try:
             yield
         finally:
