@@ -24,7 +24,7 @@ from planner.domains import load_domain
 from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
 from planner.report import failure_kind, query_summary, render_html, summarize, table_markdown
-from planner.store import QueryOutcome, RunStore
+from planner.store import BenchTrialRecord, QueryOutcome, RunStore
 from tests.postgres import PostgresServer
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
@@ -313,6 +313,30 @@ def test_a_benchmark_of_variants_reports_each_against_learned(tmp_path: Path) ->
     for cell in (cells[2], cells[3], cells[5]):
         assert re.fullmatch(change, cell), cell
     assert cells[4] == "-" or re.fullmatch(change, cells[4]), cells[4]
+
+
+def test_a_benchmark_of_baseline_and_learned_has_no_ablation_section(tmp_path: Path) -> None:
+    """With only the reference beside learned, "against learned" would be the paired figure
+    the other way round: the report leaves it out (and the dashboard's summary skips it)."""
+    db = tmp_path / "two.db"
+    config = {"scene": "line-3", "planners": ["baseline", "learned"], "seeds": [0, 1, 2],
+              "budget_s": 10.0, "model": None, "order": "auto", "domain": None}  # fmt: skip
+    with RunStore(db) as store:
+        bench_id = store.create_bench(config)
+        for seed in config["seeds"]:
+            for planner, planning in (("baseline", 4.0 + seed), ("learned", 2.0 + seed)):
+                store.record_trial(
+                    BenchTrialRecord(
+                        bench_id=bench_id, seed=seed, planner=planner, run_id=None,
+                        status="solved", valid=True, planning_s=planning, execution_s=5.0,
+                        oracle_s=None, queries=0, error=None,
+                    )
+                )  # fmt: skip
+        store.set_bench_status(bench_id, "done")
+    summary = summarize(db, bench_id)
+    assert summary["paired_against"] == {}
+    assert summary["paired"]["learned"]["planning_censored"]["mean"] == pytest.approx(1 - 3 / 5)
+    assert "total vs learned" not in table_markdown(summary)
 
 
 def test_tamp_bench_refuses_a_sqlite_file_for_a_ray_cluster(
