@@ -470,9 +470,9 @@ class Featurizer:
         self._spec = spec
         self._codec = codec
         self._state = state
-        # The state part of each context object featurized lately: a search's rows queried in
-        # one state share their context (planner.search.learned.stream_rows).
-        self._scene_parts: dict[int, tuple[Context, FloatArray]] = {}
+        # The state part of the contexts featurized lately, by what they are made of (see
+        # _scene_part).
+        self._scene_parts: dict[tuple[Any, ...], tuple[Context, FloatArray]] = {}
         self._layouts = {layout.stream: layout for layout in spec.streams}
         self._name_index = {
             layout.stream: [{v: i for i, v in enumerate(s.vocabulary)} for s in layout.slots]
@@ -676,16 +676,28 @@ class Featurizer:
         return out
 
     def _scene_part(self, context: Context) -> FloatArray:
-        """The state part of ``context``'s rows, computed once per context object (the object
-        is kept with it, so its id is not reused; contexts are read, never changed)."""
-        hit = self._scene_parts.get(id(context))
-        if hit is not None and hit[0] is context:
+        """The state part of ``context``'s rows, computed once per make-up of the context: the
+        same objects under the same keys (its facts list, each value, each static entry). A
+        search's contexts share those objects: one facts list per state
+        (planner.search.queries), each bound value encoded once, so a state part is computed
+        again only where a binding changed it. The first context of a make-up is kept with its
+        part, which keeps its objects, so their ids are not reused; contexts are read, never
+        changed."""
+        values = context.get("values")
+        items = values.items() if isinstance(values, Mapping) else ()
+        key = (
+            *((k, id(v)) for k, v in context.items() if k != "values"),
+            None,
+            *((k, id(v)) for k, v in items),
+        )
+        hit = self._scene_parts.get(key)
+        if hit is not None:
             return hit[1]
         part = np.zeros(self._state.scene_width, dtype=np.float32)
         self._state.scene_features(context, part, 0)
         if len(self._scene_parts) >= MAX_SEEN_CONTEXTS:
             self._scene_parts.clear()
-        self._scene_parts[id(context)] = (context, part)
+        self._scene_parts[key] = (context, part)
         return part
 
     def matrix(
