@@ -73,6 +73,18 @@ class QueryLike(Protocol):
 # --- the state hook ----------------------------------------------------------------------------
 
 
+def _makeup(context: Context) -> tuple[Any, ...]:
+    """What ``context`` is made of: each entry's key and object, and each value's name and
+    object, by identity. Two contexts of one make-up give the same features."""
+    values = context.get("values")
+    items = values.items() if isinstance(values, Mapping) else ()
+    return (
+        *((k, id(v)) for k, v in context.items() if k != "values"),
+        None,
+        *((k, id(v)) for k, v in items),
+    )
+
+
 class StateEncoder(Protocol):
     """A fitted encoding of the state (and of anything else per stream): saved in the model."""
 
@@ -473,6 +485,7 @@ class Featurizer:
         # The state part of the contexts featurized lately, by what they are made of (see
         # _scene_part).
         self._scene_parts: dict[tuple[Any, ...], tuple[Context, FloatArray]] = {}
+        self._stream_parts: dict[tuple[Any, ...], tuple[Context, list[Any], Sequence[float]]] = {}
         self._layouts = {layout.stream: layout for layout in spec.streams}
         self._name_index = {
             layout.stream: [{v: i for i, v in enumerate(s.vocabulary)} for s in layout.slots]
@@ -666,38 +679,50 @@ class Featurizer:
                     features = self._codec.features(slot.kind, value, slot.size, wheres[i])
                     out[offset + 1 : offset + 1 + len(features)] = features
                 offset += widths[i]
+        makeup = _makeup(context)
         extra = self._state.stream_width(stream)
         if extra:
-            out[offset : offset + extra] = self._state.stream_features(stream, inputs, context)
+            out[offset : offset + extra] = self._stream_part(stream, inputs, context, makeup)
             offset += extra
-        out[offset:] = self._scene_part(context)
+        out[offset:] = self._scene_part(context, makeup)
         if layout is not None:
             self._state.finish_row(stream, inputs, out, self._slot_places[stream])
         return out
 
-    def _scene_part(self, context: Context) -> FloatArray:
-        """The state part of ``context``'s rows, computed once per make-up of the context: the
-        same objects under the same keys (its facts list, each value, each static entry). A
-        search's contexts share those objects: one facts list per state
+    def _scene_part(self, context: Context, makeup: tuple[Any, ...]) -> FloatArray:
+        """The state part of ``context``'s rows, computed once per make-up of the context
+        (:func:`_makeup`). A search's contexts share their objects: one facts list per state
         (planner.search.queries), each bound value encoded once, so a state part is computed
         again only where a binding changed it. The first context of a make-up is kept with its
         part, which keeps its objects, so their ids are not reused; contexts are read, never
         changed."""
-        values = context.get("values")
-        items = values.items() if isinstance(values, Mapping) else ()
-        key = (
-            *((k, id(v)) for k, v in context.items() if k != "values"),
-            None,
-            *((k, id(v)) for k, v in items),
-        )
-        hit = self._scene_parts.get(key)
+        hit = self._scene_parts.get(makeup)
         if hit is not None:
             return hit[1]
         part = np.zeros(self._state.scene_width, dtype=np.float32)
         self._state.scene_features(context, part, 0)
         if len(self._scene_parts) >= MAX_SEEN_CONTEXTS:
             self._scene_parts.clear()
-        self._scene_parts[key] = (context, part)
+        self._scene_parts[makeup] = (context, part)
+        return part
+
+    def _stream_part(
+        self,
+        stream: str,
+        inputs: Sequence[Any | None],
+        context: Context,
+        makeup: tuple[Any, ...],
+    ) -> Sequence[float]:
+        """The stream part of a row, computed once per stream, input objects and make-up of
+        the context (as :meth:`_scene_part`; the inputs are kept with it too)."""
+        key = (stream, *(id(x) for x in inputs), makeup)
+        hit = self._stream_parts.get(key)
+        if hit is not None:
+            return hit[2]
+        part = self._state.stream_features(stream, inputs, context)
+        if len(self._stream_parts) >= MAX_SEEN_CONTEXTS:
+            self._stream_parts.clear()
+        self._stream_parts[key] = (context, list(inputs), part)
         return part
 
     def matrix(

@@ -189,6 +189,21 @@ def test_a_placement_sees_the_room_left_on_its_platform() -> None:
     _, crowded, _ = room((0.0, -1.225), (-0.075, -1.075), (0.075, -1.075))
     assert crowded < 10.0  # on the 9 x 9 grid of centres: 9.4 cm
     assert room()[1] == pytest.approx(30.0)  # an empty stove: plenty
+    # One context, two blocks: each row is the room its own block has (a search's rows of one
+    # state share their context, and the featurizer keeps parts by what they read).
+    shared = {
+        "geometry": {**geometry, "blocks": {"b4": 0.07, "b5": 0.30}},
+        "facts": [["on", "b1", "stove"], ["at-pose", "b1", "pb1"]],
+        "values": {"pb1": _pose(-0.075, -1.225, 0.0)},
+    }
+    rows = [featurizer.row("sample-placement", [b, "stove"], shared) for b in ("b4", "b5", "b4")]
+    alone = [
+        Featurizer.fit([], domain=KITCHEN).row("sample-placement", [b, "stove"], dict(shared))
+        for b in ("b4", "b5")
+    ]
+    cm = names.index("room.cm")
+    assert rows[0][cm] > 10.0 and rows[1][cm] == 0.0  # b5 is wider than the stove
+    assert [r.tolist() for r in rows] == [a.tolist() for a in (*alone, alone[0])]
     # Without geometry (a store recorded before it was in the context): unknown.
     row = featurizer.row("sample-placement", ["b4", "stove"], {"facts": [], "values": {}})
     assert row[names.index("room.unknown")] == 1.0
