@@ -71,7 +71,7 @@ class Dashboard:
         """Find the scenes and read the models, before the server takes requests. Every page
         asks for both; finding the scenes loads every domain (seconds, for one that imports a
         simulator) and reading the models imports torch. In the first page's requests they held
-        up the rest: a compare view of two 20,000-node trees waited 4 s for them."""
+        up the rest (docs/BENCHMARKS.md, the dashboard's pages)."""
         start = time.perf_counter()
         try:
             scenes, models = self.domains.scenes(), self.models.list()

@@ -43,9 +43,8 @@ MAX_SECONDS = 1e6  # predicted costs are capped here (exp of a wild extrapolatio
 COST_HEADS = ("r_s", "r_f", "r_m")
 # Predictions run on one torch thread: a search's batches are tens to hundreds of rows through
 # 64-unit layers, too small to gain from intra-op threads, and on a machine whose cores are all
-# busy (a benchmark's workers, the dashboard) those threads wait on each other. Measured on a
-# kitchen-8 run beside a two-worker benchmark: 2.48 s of predictions with torch's default
-# threads, 0.35 s with one (same predictions, same run).
+# busy (a benchmark's workers, the dashboard) those threads wait on each other (docs/BENCHMARKS.md,
+# the search's seconds per node).
 INFERENCE_THREADS = 1
 
 Float64Array = npt.NDArray[np.float64]

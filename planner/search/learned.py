@@ -297,7 +297,7 @@ class LearnedPolicy:
         # rest are its parent's, predicted before or earlier in this batch (parents come first).
         # A stream plan's own node binds nothing: its rows are those of the initial values, and
         # stream plans share most of them (the same stream, inputs and state): each such row is
-        # predicted once (kitchen-8: a quarter of all rows).
+        # predicted once.
         rows: list[Row] = []
         slots: dict[int, list[int | StreamCost]] = {}  # per node: a row of this batch, or a cost
         opened: dict[_RootKey, int] = {}  # a plan node's row in this batch, by what it reads
