@@ -57,11 +57,8 @@ class StreamContext:
         """The facts of ``predicates`` in the state, as ``(predicate, value, ...)`` with each
         object's value (its name where it has none), in a fixed order."""
         wanted = set(predicates)
-        return [
-            (a.predicate, *(self.values.get(x, x) for x in a.args))
-            for a in sorted(self.state)
-            if a.predicate in wanted
-        ]
+        facts = sorted(a for a in self.state if a.predicate in wanted)  # filter, then sort
+        return [(a.predicate, *(self.values.get(x, x) for x in a.args)) for a in facts]
 
 
 @dataclass

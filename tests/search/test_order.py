@@ -10,7 +10,7 @@ import pytest
 
 from planner.abstract import AbstractConfig, plan_abstract
 from planner.abstract.skeleton import AbstractPlan
-from planner.api import RunConfig
+from planner.api import RunConfig, solve
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.domains.kitchen import MODEL
 from planner.pddl.structs import Atom, Problem
@@ -200,3 +200,49 @@ def test_a_domain_whose_unread_names_an_unknown_stream_is_refused(tmp_path: Path
         DomainLoadError, match=r"unread names streams not in .*stream\.pddl: sample-placment"
     ):
         load_domain(tmp_path)
+
+
+ORDER_SCENE = str(Path(__file__).parent / "order_domain" / "scenes" / "order-1.json")
+
+
+@pytest.mark.parametrize("model_order", ["on", "off"])
+def test_the_model_order_finds_the_doubtful_value_before_paying_for_the_dear_one(
+    tmp_path: Path, model_order: str
+) -> None:
+    """model_order, on a domain built for it (tests/search/order_domain): the plan needs a dear
+    value that is always found, then a cheap one found one query in four, which does not read
+    the first. With priors from recorded baseline runs, the learned planner looks for the
+    doubtful value first and pays for the dear one once, when it is sure to be used; off, it
+    keeps the plan's order and pays for the dear value before it knows the plan can be bound."""
+    from dataclasses import asdict
+
+    from planner.runs import record_run
+    from planner.store import RunStore
+
+    db = tmp_path / "priors.db"
+    store = RunStore(f"sqlite:///{db}")
+    for seed in range(3):
+        config = RunConfig(scene=ORDER_SCENE, seed=seed, planner="baseline", budget_s=30)
+        run_id = store.create_run(config.scene, seed, config.planner, asdict(config))
+        assert record_run(config, store, run_id).status == "solved"
+    store.close()
+    for seed in range(3):
+        config = RunConfig(
+            scene=ORDER_SCENE,
+            seed=seed,
+            planner=f"learned:model_order={model_order}",
+            budget_s=30,
+            priors_db=str(db),
+        )
+        result = solve(config).result
+        assert result.solved
+        streams = [q.stream for q in result.queries]
+        found = next(
+            i for i, q in enumerate(result.queries) if q.stream == "sample-cheap" and q.success
+        )
+        dear_before = streams[:found].count("sample-dear")
+        if model_order == "on":
+            assert streams[0] == "sample-cheap" and dear_before == 0
+            assert streams.count("sample-dear") == 1
+        else:
+            assert streams[0] == "sample-dear" and dear_before >= 1
