@@ -146,6 +146,13 @@ class Served:
                 seen = self.events.setdefault(run_id, {}).setdefault(event["seq"], event)
                 assert seen == event, (run_id, seen, event)  # served twice, the same
 
+    def wait_any(self, run_ids: list[str], timeout: float) -> None:
+        """Until a client was served an event of one of ``run_ids``."""
+        deadline = time.monotonic() + timeout
+        while not any(self.events.get(run_id) for run_id in run_ids):
+            assert time.monotonic() < deadline, f"no event of {run_ids} in {timeout} s"
+            time.sleep(0.02)
+
     def follow(self, server: Server, run_id: str) -> None:
         for target in (self._websocket, self._rest):
             thread = threading.Thread(target=target, args=(server, run_id), daemon=True)
@@ -230,6 +237,7 @@ def test_kill_9_of_server_and_workers_loses_nothing_served(scenes: Path, tmp_pat
     rng = random.Random(28)
     served = Served()
     launched = 0
+    ids: list[str] = []
     kinds: dict[str, int] = {}
     for life in range(8):
         server = Server(db, scenes, log)
@@ -244,6 +252,11 @@ def test_kill_9_of_server_and_workers_loses_nothing_served(scenes: Path, tmp_pat
             run = server.api("/api/runs", body)
             launched += 1
             served.follow(server, run["id"])
+            ids.append(run["id"])
+        # The kill's moment counts from the first event of this life's runs, not from the
+        # launch: on a busy machine a worker's start (imports) can outlast a fixed delay, and
+        # every kill would land before any run began.
+        served.wait_any(ids[-3:], timeout=60)
         time.sleep(rng.uniform(0.0, 4.0))
         kind = rng.choice(["server", "both", "workers first"])
         kinds[kind] = kinds.get(kind, 0) + 1
