@@ -143,11 +143,11 @@ class LearnedConfig:
     likely to fail first, never before the streams whose outputs they read
     (planner/search/order.py); off: the plan's own order (``--order`` overrides either way).
 
-    Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): kitchen-4, 30 seeds:
-    planning 12% more without it (3% less to 29% more), total 7% more (0% to 14% more);
-    tabletop-4: planning 5% more (7% less to 19% more). Not measurable alone on either; kept
-    until its kitchen-8 row is measured, where earlier ablations found the learned planner's
-    lead came from this order."""
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on kitchen-8 (13d3942, 40
+    seeds): without it 2 timeouts in 40, total 27.6% more (11.8% to 47.0% more), planning 124%
+    more, plans executing 10.4% longer (4.1% to 16.9% longer); not measurable on kitchen-4
+    (a73daea, 30 seeds: total 7% more, 0% to 14% more) nor tabletop-4 (planning 5% more, 7%
+    less to 19% more)."""
 
     @classmethod
     def paper(cls) -> LearnedConfig:
