@@ -127,16 +127,16 @@ class LearnedConfig:
     end counts as a failed attempt of its parent's query.
 
     Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4:
-    without it 8 timeouts in 40 and planning 1325% more (745% to 1931% more); kitchen-4, 30
-    seeds: 21% more (1% less to 59% more)."""
+    without it 8 timeouts in 40 and planning 1325% more (745% to 1931% more); not measurable
+    on kitchen-4 (13d3942, 40 seeds: total 1.6% more, 1.1% less to 4.9% more)."""
 
     subtree_min: bool = True
     """A node is estimated by the lowest Q in its subtree, dead ends left out (progress along
     a plan counts); off: by its own Q.
 
     Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4:
-    planning 105% more without it (63% to 156% more); kitchen-4, 30 seeds: 6% more (4% less to
-    18% more)."""
+    planning 105% more without it (63% to 156% more); on kitchen-4 (13d3942, 40 seeds) its
+    plans execute 5.0% longer without it (0.4% to 10.4% longer)."""
 
     model_order: bool = True
     """Each stream plan is reordered before the search by the model's predictions: cheap tests
@@ -145,9 +145,9 @@ class LearnedConfig:
 
     Measured (off against on, paired, docs/BENCHMARKS.md): helps on kitchen-8 (13d3942, 40
     seeds): without it 2 timeouts in 40, total 27.6% more (11.8% to 47.0% more), planning 124%
-    more, plans executing 10.4% longer (4.1% to 16.9% longer); not measurable on kitchen-4
-    (a73daea, 30 seeds: total 7% more, 0% to 14% more) nor tabletop-4 (planning 5% more, 7%
-    less to 19% more)."""
+    more, plans executing 10.4% longer (4.1% to 16.9% longer); helps on kitchen-4 (13d3942, 40
+    seeds): total 14.2% more without it (2.4% to 29.7% more); not measurable on tabletop-4
+    (a73daea: planning 5% more, 7% less to 19% more)."""
 
     @classmethod
     def paper(cls) -> LearnedConfig:
