@@ -331,14 +331,19 @@ def q_scale(trees: Sequence[Tree]) -> tuple[float, float] | None:
     return float(lo), float(hi)
 
 
-def time_split(record: RunRecord, tree: Tree, outcomes: Sequence[QueryOutcome]) -> dict[str, Any]:
+def time_split(
+    record: RunRecord,
+    tree: Tree,
+    outcomes: Sequence[QueryOutcome],
+    search_cpu_s: float | None = None,
+) -> dict[str, Any]:
     """:func:`planner.report.run_time_split` of one run, with its execution seconds; a run
     still going counts its planning seconds so far."""
     plans_at = tree.plans_t  # what store.event_times(..., "abstract_plans_found") reads
     planning = record.planning_s
     if planning is None:
         planning = max([plans_at, *tree.query_t[-1:]])
-    split = run_time_split(planning, plans_at, outcomes)
+    split = run_time_split(planning, plans_at, outcomes, search_cpu_s)
     return {
         **split,
         "execution_s": record.execution_s,
@@ -387,7 +392,12 @@ def compare_runs(store: RunStore, trees: Trees, a_id: str, b_id: str) -> dict[st
         return {
             "run": record,
             "nodes": tree.size,
-            "split": time_split(record, tree, outcomes),
+            "split": time_split(
+                record,
+                tree,
+                outcomes,
+                store.event_numbers([record.id], "run_finished", "search_cpu_s").get(record.id),
+            ),
             # the run's queries per stream: how many failed and why (tamp report's)
             "queries": query_summary(outcomes),
             "curve": curve(tree),

@@ -275,6 +275,11 @@ class TimeSplitOut(BaseModel):
     queries_s: float
     queries_by_stream_s: dict[str, float]
     search_s: float = Field(description="the rest: the search's own seconds")
+    search_cpu_s: float | None = Field(
+        default=None,
+        description="the search thread's CPU seconds outside the queries, as the run recorded "
+        "them (None for a run still going, or recorded before runs did)",
+    )
     execution_s: float | None
     so_far: bool = Field(description="the run is still going")
 

@@ -127,6 +127,8 @@ class RunResult:
     queries: list[QueryResult] = field(repr=False)
     nodes: int = 0  # tree nodes (tree searches) or skeletons tried (sequential)
     reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
+    # CPU seconds of the search's own thread outside the stream queries (tree searches only)
+    search_cpu_s: float | None = None
 
     @property
     def solved(self) -> bool:
@@ -335,6 +337,7 @@ def solve(
         message=message,
         valid=valid,
         plan=plan,
+        search_cpu_s=result.search_cpu_s,
     )
     return out
 
@@ -398,5 +401,6 @@ def _solve(
         outcome.queries,
         outcome.nodes,
         outcome.reused,
+        outcome.search_cpu_s,
     )
     return PlanResult(result, loaded, problem, task.runtime)

@@ -488,6 +488,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         "oracle_s": None if result.oracle_s is None else round(result.oracle_s, 3),
         "execution_s": None if result.execution_s is None else round(result.execution_s, 3),
         "cost": result.bound.cost if result.bound is not None else None,
+        "search_cpu_s": None if result.search_cpu_s is None else round(result.search_cpu_s, 3),
         "nodes": result.nodes,
         "queries": {s: {"ok": counts[(s, True)], "failed": counts[(s, False)]} for s in streams},
         "reused": result.reused,
@@ -510,6 +511,11 @@ def cmd_plan(args: argparse.Namespace) -> int:
         print(
             f"  tree nodes: {result.nodes}, queries: {len(result.queries)}"
             + (f" (and {result.reused} reused)" if result.reused else "")
+            + (
+                f"; the search's own CPU {result.search_cpu_s:.2f} s"
+                if result.search_cpu_s is not None
+                else ""
+            )
         )
         for s in streams:
             print(f"  {s:20} {counts[(s, True)]:5} ok {counts[(s, False)]:5} failed")

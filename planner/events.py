@@ -252,13 +252,16 @@ class RunFinished(_EventBase):
     message: str
     valid: bool | None = None  # whether the plan validated; None without a plan
     plan: dict[str, Any] | None = None  # the bound plan file (planner/plans.py), when solved
+    # CPU seconds of the search's thread outside the stream queries (selection, a learned
+    # planner's features and predictions, events); None for planners without a tree search.
+    search_cpu_s: float | None = None
 
     def _validate(self) -> None:
         if self.status not in FINISH_STATUSES:
             self._fail(
                 "status", f"unknown status {self.status!r} (known: {', '.join(FINISH_STATUSES)})"
             )
-        self._non_negative("planning_s", "execution_s", "oracle_s", "queries")
+        self._non_negative("planning_s", "execution_s", "oracle_s", "queries", "search_cpu_s")
 
 
 @dataclass(frozen=True)

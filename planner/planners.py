@@ -87,6 +87,7 @@ class PlannerOutcome:
     queries: list[QueryResult]  # queries a sampler answered, in order
     nodes: int  # tree nodes (tree searches) or skeletons tried (sequential)
     reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
+    search_cpu_s: float | None = None  # the search thread's CPU outside queries (tree searches)
 
 
 @dataclass(frozen=True)
@@ -244,7 +245,14 @@ class _TreeSearchPlanner(Planner):
             execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
             oracle_s = task.topk_s + outcome.oracle_query_s
         return PlannerOutcome(
-            outcome.status, bound, execution_s, oracle_s, queries, len(search.tree), reused
+            outcome.status,
+            bound,
+            execution_s,
+            oracle_s,
+            queries,
+            len(search.tree),
+            reused,
+            outcome.search_cpu_s,
         )
 
 

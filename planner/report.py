@@ -98,12 +98,19 @@ def query_summary(outcomes: Iterable[QueryOutcome]) -> dict[str, Any]:
 
 
 def run_time_split(
-    planning_s: float, until_plans_s: float, outcomes: Iterable[QueryOutcome]
+    planning_s: float,
+    until_plans_s: float,
+    outcomes: Iterable[QueryOutcome],
+    search_cpu_s: float | None = None,
 ) -> dict[str, Any]:
     """Where one run's planning seconds went: until the abstract plans were found (top-k, and a
     learned planner's model loading and stream order), the stream queries' own seconds (in
     all and per stream), and the rest, the search itself (selection, a learned planner's
-    feature rows and predictions, events). ``outcomes`` are the run's queries."""
+    feature rows and predictions, events). ``outcomes`` are the run's queries.
+
+    ``search_s`` is wall time, so on a busy machine it holds the seconds the search waited for
+    a core; ``search_cpu_s`` (recorded by the run, None for runs before it was) is the
+    search thread's own CPU seconds outside the queries, which other processes do not add to."""
     by_stream: dict[str, float] = {}
     for q in outcomes:
         by_stream[q.stream] = by_stream.get(q.stream, 0.0) + q.wall_s
@@ -114,6 +121,7 @@ def run_time_split(
         "queries_s": queries,
         "queries_by_stream_s": dict(sorted(by_stream.items())),
         "search_s": planning_s - until_plans_s - queries,
+        "search_cpu_s": search_cpu_s,
     }
 
 
@@ -121,8 +129,10 @@ def time_split(
     trials: Sequence[BenchTrialRecord],
     plans_at: Mapping[str, float],
     outcomes: Iterable[QueryOutcome],
+    search_cpu: Mapping[str, float] | None = None,
 ) -> dict[str, Any]:
-    """:func:`run_time_split` of a planner's trials, on average over the trials with a run."""
+    """:func:`run_time_split` of a planner's trials, on average over the trials with a run
+    (``search_cpu_s``: over those that recorded it, None if none did)."""
     ids = {t.run_id for t in trials if t.run_id and t.planning_s is not None}
     if not ids:
         return {
@@ -131,16 +141,24 @@ def time_split(
             "queries_s": None,
             "queries_by_stream_s": {},
             "search_s": None,
+            "search_cpu_s": None,
         }
     mine: dict[str, list[QueryOutcome]] = {run_id: [] for run_id in ids}
     for q in outcomes:
         if q.run_id in mine:
             mine[q.run_id].append(q)
+    cpu = search_cpu or {}
     splits = [
-        run_time_split(t.planning_s or 0.0, plans_at.get(t.run_id or "", 0.0), mine[t.run_id or ""])
+        run_time_split(
+            t.planning_s or 0.0,
+            plans_at.get(t.run_id or "", 0.0),
+            mine[t.run_id or ""],
+            cpu.get(t.run_id or ""),
+        )
         for t in trials
         if t.run_id in ids
     ]
+    cpus = [s["search_cpu_s"] for s in splits if s["search_cpu_s"] is not None]
     n = len(splits)
     streams = sorted({s for split in splits for s in split["queries_by_stream_s"]})
 
@@ -156,6 +174,7 @@ def time_split(
             for stream in streams
         },
         "search_s": mean("search_s"),
+        "search_cpu_s": sum(cpus) / len(cpus) if cpus else None,
     }
 
 
@@ -212,6 +231,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
         run_ids = [t.run_id for t in trials if t.run_id]
         outcomes = store.query_outcomes(run_ids)
         plans_at = store.event_times(run_ids, "abstract_plans_found")
+        search_cpu = store.event_numbers(run_ids, "run_finished", "search_cpu_s")
     planner_of = {t.run_id: t.planner for t in trials if t.run_id}
     config = bench.config
     planners: list[str] = list(config["planners"])
@@ -237,7 +257,7 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),
             "planning_over_oracle": _stats(ratios),
             "time_split": time_split(
-                [t for t in ts if t.run_id], plans_at, outcomes
+                [t for t in ts if t.run_id], plans_at, outcomes, search_cpu
             ),  # over every trial with a run
             "queries": query_summary(q for q in outcomes if planner_of.get(q.run_id) == p),
         }
@@ -300,6 +320,11 @@ def _fmt(v: Any, pct: bool = False) -> str:
     return f"{v:.1f}" if isinstance(v, float) else str(v)
 
 
+def _fmt2(v: float | None) -> str:
+    """Seconds to two decimals (the search's own seconds are fractions of one)."""
+    return "-" if v is None or math.isnan(v) else f"{v:.2f}"
+
+
 def table_markdown(summary: dict[str, Any]) -> str:
     """The per-planner table and the paired improvements, as markdown."""
     lines = [
@@ -345,13 +370,13 @@ def _ablation_markdown(
     base = summary["reference"]
     lines = [
         f"| planner | solved | total vs {ref} | planning vs {ref} | execution vs {ref} | "
-        f"total vs {base} | search s |",
+        f"total vs {base} | search s, wall / CPU |",
         "| --- | --- | --- | --- | --- | --- | --- |",
     ]
     for p, s in summary["planners"].items():
         mine = entries.get(p)
         vs_base = summary["paired"].get(p)
-        split = s.get("time_split", {}).get("search_s")
+        split = s.get("time_split", {})
         lines.append(
             f"| {p} | {s['solved']}/{s['trials']} | "
             + (
@@ -361,7 +386,7 @@ def _ablation_markdown(
                 else "- | - | -"
             )
             + f" | {_ci(vs_base['total_censored']) if vs_base is not None else '-'} | "
-            + f"{_fmt(split)} |"
+            + f"{_fmt2(split.get('search_s'))} / {_fmt2(split.get('search_cpu_s'))} |"
         )
     return lines
 

@@ -325,9 +325,9 @@ export class BenchPage {
         <td class="num">${s.trials}</td><td class="num">${s.solved} (${pct(s.solved_fraction)})</td>
         <td class="num">${stat(s.planning_s)}</td><td class="num">${stat(s.execution_s)}</td>
         <td class="num">${stat(s.total_s)}</td><td class="num">${seconds(s.total_s_censored?.mean)}</td>
-        <td class="num">${seconds(s.time_split?.queries_s)}</td><td class="num">${seconds(s.time_split?.search_s)}</td></tr>`,
+        <td class="num">${seconds(s.time_split?.queries_s)}</td><td class="num">${seconds(s.time_split?.search_s)} <span class="muted">/ ${seconds(s.time_split?.search_cpu_s)}</span></td></tr>`,
     );
-    return `<tr><th>planner</th><th>trials</th><th>solved</th><th>planning mean / median</th><th>execution</th><th>total</th><th>total, unsolved at budget</th><th>queries s (mean)</th><th>search s (mean)</th></tr>${rows.join("")}`;
+    return `<tr><th>planner</th><th>trials</th><th>solved</th><th>planning mean / median</th><th>execution</th><th>total</th><th>total, unsolved at budget</th><th>queries s (mean)</th><th title="the search's own seconds outside the stream queries: wall, then its thread's CPU">search s, wall / CPU (mean)</th></tr>${rows.join("")}`;
   }
 
   _pairedTable(summary) {

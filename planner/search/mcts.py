@@ -117,6 +117,10 @@ class SearchResult:
     iterations: int
     seconds: float
     oracle_query_s: float  # wall seconds of the successful queries on the solution branch
+    # CPU seconds of the search's own thread outside the stream queries: selection, a learned
+    # policy's features and predictions, events. Unlike wall seconds, a busy machine's other
+    # processes do not add to it.
+    search_cpu_s: float = 0.0
 
     @property
     def solved(self) -> bool:
@@ -188,6 +192,7 @@ class TreeSearch:
         self.deepest = 0.0  # largest share of a stream plan bound so far
         self._last_progress = 0.0
         self._plans_open = 0  # stream plans given a node under the root so far
+        self._query_cpu_s = 0.0  # this thread's CPU seconds inside the runtime's queries
 
     # --- events ------------------------------------------------------------------------------
 
@@ -254,9 +259,11 @@ class TreeSearch:
             reused_from, outputs_, wall_s = earlier
             result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True)
         else:
+            cpu = time.thread_time()
             result = self.runtime.query(
                 inst.stream, inputs, key=(node.id, inst.stream), context=context
             )
+            self._query_cpu_s += time.thread_time() - cpu
         outputs = (
             dict(zip(inst.outputs, result.outputs, strict=True))
             if result.outputs is not None
@@ -337,6 +344,7 @@ class TreeSearch:
         """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, or stop. A
         second call goes on with the same tree (no stream plan is opened twice)."""
         start = time.perf_counter() if start is None else start
+        cpu_start, query_cpu_start = time.thread_time(), self._query_cpu_s
         first = min(self.policy.initial_plans(len(self.skeletons)), len(self.skeletons))
         while self._plans_open < first:
             self._open_plan(self._plans_open)
@@ -378,8 +386,11 @@ class TreeSearch:
                 status = "solved"
                 break
         seconds = time.perf_counter() - start
+        own_cpu = time.thread_time() - cpu_start - (self._query_cpu_s - query_cpu_start)
         if solution is None:
-            return SearchResult(status, None, None, {}, self.queries, iterations, seconds, 0.0)
+            return SearchResult(
+                status, None, None, {}, self.queries, iterations, seconds, 0.0, max(own_cpu, 0.0)
+            )
         branch = set(self.tree.path(solution.id))
         oracle = sum(self.tree[i].query_wall_s for i in branch)
         execution = sum(r.execution_s for node_id, r in self.queries if node_id in branch)
@@ -402,4 +413,5 @@ class TreeSearch:
             iterations,
             seconds,
             oracle,
+            max(own_cpu, 0.0),
         )

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from sqlalchemy import (
+    JSON,
     URL,
     BigInteger,
     Connection,
@@ -33,6 +34,7 @@ from sqlalchemy import (
     Integer,
     String,
     Text,
+    cast,
     create_engine,
     delete,
     event,
@@ -40,6 +42,7 @@ from sqlalchemy import (
     insert,
     make_url,
     select,
+    type_coerce,
     update,
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
@@ -734,6 +737,27 @@ class RunStore:
                     .group_by(EventRow.run_id)
                 )
                 out.update({run_id: float(t) for run_id, t in conn.execute(query)})
+        return out
+
+    def event_numbers(self, run_ids: list[str], type_: str, field: str) -> dict[str, float]:
+        """Per run: the number ``field`` of its first event of type ``type_``, read in the
+        database (a ``run_finished`` payload holds the whole plan file); runs without one, or
+        whose event has no such number, are left out."""
+        # SQLite reads JSON from text as it is; PostgreSQL needs the text cast to json.
+        coerce = type_coerce if self.engine.dialect.name == "sqlite" else cast
+        value = coerce(EventRow.payload, JSON)[field].as_float()
+        out: dict[str, float] = {}
+        with self.engine.connect() as conn:
+            for i in range(0, len(run_ids), 500):  # SQLite caps a statement's parameters
+                chunk = run_ids[i : i + 500]
+                query = (
+                    select(EventRow.run_id, value)
+                    .where(EventRow.run_id.in_(chunk), EventRow.type == type_)
+                    .order_by(EventRow.seq)
+                )
+                for run_id, number in conn.execute(query):
+                    if number is not None and run_id not in out:
+                        out[run_id] = float(number)
         return out
 
     # benchmarks

@@ -101,8 +101,11 @@ def test_time_split_and_queries_are_the_reports(
         run = store.get_run(run_id)
         outcomes = store.query_outcomes([run_id])
         plans_at = store.event_times([run_id], "abstract_plans_found")[run_id]
+        cpu = store.event_numbers([run_id], "run_finished", "search_cpu_s").get(run_id)
     assert run.planning_s is not None
-    expected = run_time_split(run.planning_s, plans_at, outcomes)
+    # The run recorded its search's own CPU: no more than the search's wall seconds.
+    assert cpu is not None and 0.0 <= cpu <= run.planning_s - plans_at
+    expected = run_time_split(run.planning_s, plans_at, outcomes, cpu)
     by_stream = expected.pop("queries_by_stream_s")
     assert split["queries_by_stream_s"] == pytest.approx(by_stream)
     assert {k: split[k] for k in expected} == pytest.approx(expected)

@@ -7,6 +7,7 @@ import json
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -74,6 +75,45 @@ def test_a_search_run_again_goes_on_with_its_tree() -> None:
     result = ts.run(deadline=time.perf_counter() + 30)
     assert result.solved
     assert len(ts.tree[0].children) == len({ts.tree[c].plan_index for c in ts.tree[0].children})
+
+
+def _burn(seconds: float) -> None:
+    end = time.thread_time() + seconds
+    while time.thread_time() < end:
+        pass
+
+
+def test_the_search_cpu_counts_the_searchs_own_work_not_its_queries() -> None:
+    """``search_cpu_s`` is what the search's own choices cost: CPU a sampler spends is the
+    query's, CPU a policy spends is the search's."""
+
+    class SlowRuntime:
+        def __init__(self, inner: Any) -> None:
+            self.inner = inner
+
+        def query(self, *args: Any, **kwargs: Any) -> Any:
+            _burn(0.01)
+            return self.inner.query(*args, **kwargs)
+
+    picks = []
+
+    class SlowPolicy(BaselinePolicy):
+        def pick_plan(self, tree: Any) -> Any:
+            picks.append(1)
+            _burn(0.01)
+            return super().pick_plan(tree)
+
+    ts = search(3)
+    ts.runtime = SlowRuntime(ts.runtime)  # type: ignore[assignment]  # answers like a runtime
+    result = ts.run(deadline=time.perf_counter() + 30)
+    assert result.solved and len(result.queries) >= 5
+    assert result.search_cpu_s < 0.005 * len(result.queries)  # the samplers' CPU is not in it
+
+    ts = search(3)
+    ts.policy = SlowPolicy()
+    result = ts.run(deadline=time.perf_counter() + 30)
+    assert result.solved and len(picks) >= 3
+    assert result.search_cpu_s >= 0.01 * len(picks)  # the policy's CPU is
 
 
 def _shape(ts: TreeSearch) -> list[list[object]]:

@@ -396,6 +396,30 @@ def test_terminal_event_flushes_at_once(store: RunStore) -> None:
     sink.close()
 
 
+def test_a_closing_events_number_is_read_per_run(store: RunStore) -> None:
+    """What tamp report reads of each run's run_finished (its search CPU seconds), on either
+    backend; a run without the number is left out, not read as zero."""
+    runs = [store.create_run("line-2", 3, "learned", CONFIG) for _ in range(3)]
+    for run_id, cpu in zip(runs, (0.25, None, 1.5), strict=True):
+        sink = StoreSink(store, run_id, flush_interval_s=None)
+        emitter = Emitter(run_id, sink)
+        _emit_search(emitter, 2)
+        emitter.emit(
+            RunFinished,
+            status="solved",
+            planning_s=2.0,
+            execution_s=1.0,
+            oracle_s=1.0,
+            queries=2,
+            message="",
+            search_cpu_s=cpu,
+        )
+        sink.close()
+    found = store.event_numbers([*runs, "no-such-run"], "run_finished", "search_cpu_s")
+    assert found == {runs[0]: 0.25, runs[2]: 1.5}
+    assert store.event_numbers(runs, "run_finished", "queries") == dict.fromkeys(runs, 2.0)
+
+
 def test_timer_flushes_a_quiet_buffer(store: RunStore) -> None:
     run_id = store.create_run("line-2", 3, "learned", CONFIG)
     sink = StoreSink(store, run_id, batch_size=10_000, flush_interval_s=0.05)
