@@ -174,7 +174,7 @@ class StreamQueried(_EventBase):
     inputs: list[Any]  # JSON-encoded input values, one per input name
     success: bool
     wall_s: float
-    cpu_s: float
+    cpu_s: float  # CPU seconds of the thread that ran the sampler
     execution_s: float  # seconds to execute what the query produced; 0 if nothing moves
     error: str | None  # why the sampler failed (raised, malformed output); None otherwise
     # The world the sampler saw: fluent facts of the plan's state where its output is first

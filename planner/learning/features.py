@@ -77,11 +77,13 @@ def _makeup(context: Context) -> tuple[Any, ...]:
     """What ``context`` is made of: each entry's key and object, and each value's name and
     object, by identity. Two contexts of one make-up give the same features."""
     values = context.get("values")
-    items = values.items() if isinstance(values, Mapping) else ()
+    if not isinstance(values, Mapping):
+        values = {}
     return (
-        *((k, id(v)) for k, v in context.items() if k != "values"),
-        None,
-        *((k, id(v)) for k, v in items),
+        tuple(context),
+        tuple([0 if k == "values" else id(v) for k, v in context.items()]),
+        tuple(values),
+        tuple(map(id, values.values())),
     )
 
 
@@ -485,7 +487,8 @@ class Featurizer:
         # The state part of the contexts featurized lately, by what they are made of (see
         # _scene_part).
         self._scene_parts: dict[tuple[Any, ...], tuple[Context, FloatArray]] = {}
-        self._stream_parts: dict[tuple[Any, ...], tuple[Context, list[Any], Sequence[float]]] = {}
+        self._stream_parts: dict[tuple[Any, ...], tuple[Context, list[Any], FloatArray]] = {}
+        self._slot_parts: dict[tuple[Any, ...], tuple[list[Any], FloatArray]] = {}
         self._layouts = {layout.stream: layout for layout in spec.streams}
         self._name_index = {
             layout.stream: [{v: i for i, v in enumerate(s.vocabulary)} for s in layout.slots]
@@ -655,38 +658,58 @@ class Featurizer:
         return out + stream_part + scene_part
 
     def row(self, stream: str, inputs: Sequence[Any | None], context: Context) -> FloatArray:
-        """The feature row of one query of ``stream`` (``None`` inputs are not bound yet)."""
-        out = np.zeros(self.width(stream), dtype=np.float32)
+        """The feature row of one query of ``stream`` (``None`` inputs are not bound yet).
+
+        A row is put together from three parts, each computed once for what it reads and kept:
+        the input slots by the input objects, the stream part by those and the context's
+        make-up, the state part by the make-up (:func:`_makeup`). In a search most rows share
+        all three with rows made before; contexts and inputs are read, never changed."""
         layout = self._layouts.get(stream)
-        offset = 0
+        makeup = _makeup(context)
+        parts: list[FloatArray] = []
         if layout is not None:
             if len(inputs) != len(layout.slots):
                 raise FeatureError(
                     f"stream {stream!r} takes {len(layout.slots)} inputs, got {len(inputs)}"
                 )
-            widths = self._slot_widths[stream]
-            wheres = self._where[stream]
-            for i, slot in enumerate(layout.slots):
-                value = inputs[i]
-                if value is None:
-                    out[offset] = 1.0  # unbound: mask bit set, features stay zero
-                elif slot.kind == "name":
-                    if not isinstance(value, str):
-                        raise FeatureError(f"{wheres[i]}: expected a name, got {value!r}")
-                    index = self._name_index[stream][i].get(value, len(slot.vocabulary))
-                    out[offset + 1 + index] = 1.0
-                else:
-                    features = self._codec.features(slot.kind, value, slot.size, wheres[i])
-                    out[offset + 1 : offset + 1 + len(features)] = features
-                offset += widths[i]
-        makeup = _makeup(context)
-        extra = self._state.stream_width(stream)
-        if extra:
-            out[offset : offset + extra] = self._stream_part(stream, inputs, context, makeup)
-            offset += extra
-        out[offset:] = self._scene_part(context, makeup)
+            parts.append(self._slots_part(stream, layout, inputs))
+        if self._state.stream_width(stream):
+            parts.append(self._stream_part(stream, inputs, context, makeup))
+        parts.append(self._scene_part(context, makeup))
+        out = np.concatenate(parts)
         if layout is not None:
             self._state.finish_row(stream, inputs, out, self._slot_places[stream])
+        return out
+
+    def _slots_part(
+        self, stream: str, layout: StreamLayout, inputs: Sequence[Any | None]
+    ) -> FloatArray:
+        """The input slots of a row, computed once per stream and input objects (kept with
+        them, so their ids are not reused)."""
+        key = (stream, *map(id, inputs))
+        hit = self._slot_parts.get(key)
+        if hit is not None:
+            return hit[1]
+        widths = self._slot_widths[stream]
+        wheres = self._where[stream]
+        out = np.zeros(sum(widths), dtype=np.float32)
+        offset = 0
+        for i, slot in enumerate(layout.slots):
+            value = inputs[i]
+            if value is None:
+                out[offset] = 1.0  # unbound: mask bit set, features stay zero
+            elif slot.kind == "name":
+                if not isinstance(value, str):
+                    raise FeatureError(f"{wheres[i]}: expected a name, got {value!r}")
+                index = self._name_index[stream][i].get(value, len(slot.vocabulary))
+                out[offset + 1 + index] = 1.0
+            else:
+                features = self._codec.features(slot.kind, value, slot.size, wheres[i])
+                out[offset + 1 : offset + 1 + len(features)] = features
+            offset += widths[i]
+        if len(self._slot_parts) >= MAX_SEEN_CONTEXTS:
+            self._slot_parts.clear()
+        self._slot_parts[key] = (list(inputs), out)
         return out
 
     def _scene_part(self, context: Context, makeup: tuple[Any, ...]) -> FloatArray:
@@ -712,14 +735,19 @@ class Featurizer:
         inputs: Sequence[Any | None],
         context: Context,
         makeup: tuple[Any, ...],
-    ) -> Sequence[float]:
+    ) -> FloatArray:
         """The stream part of a row, computed once per stream, input objects and make-up of
         the context (as :meth:`_scene_part`; the inputs are kept with it too)."""
-        key = (stream, *(id(x) for x in inputs), makeup)
+        key = (stream, *map(id, inputs), makeup)
         hit = self._stream_parts.get(key)
         if hit is not None:
             return hit[2]
-        part = self._state.stream_features(stream, inputs, context)
+        part = np.asarray(self._state.stream_features(stream, inputs, context), dtype=np.float32)
+        if len(part) != self._state.stream_width(stream):
+            raise FeatureError(
+                f"stream {stream!r}: the state features gave a stream part of {len(part)} "
+                f"numbers, expected {self._state.stream_width(stream)}"
+            )
         if len(self._stream_parts) >= MAX_SEEN_CONTEXTS:
             self._stream_parts.clear()
         self._stream_parts[key] = (context, list(inputs), part)

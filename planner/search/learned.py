@@ -21,6 +21,7 @@ per node do not grow with the tree.
 
 from __future__ import annotations
 
+import bisect
 import heapq
 import math
 from collections.abc import Callable, Collection, Mapping, Sequence
@@ -96,11 +97,17 @@ def row_names(
     """Per stream of ``plan``: the objects whose values its model row reads (its inputs and the
     arguments of its context's fluent facts). A row none of whose objects a new binding names
     is the same row as before that binding."""
-    return [
-        frozenset(inst.inputs)
-        | frozenset(x for a in states[i] if a.predicate in fluents for x in a.args)
-        for i, inst in enumerate(plan.stream_plan)
-    ]
+    read: dict[int, frozenset[str]] = {}  # per state object (a plan's streams share states)
+    out = []
+    for i, inst in enumerate(plan.stream_plan):
+        state = states[i]
+        names = read.get(id(state))
+        if names is None:
+            names = read[id(state)] = frozenset(
+                x for a in state if a.predicate in fluents for x in a.args
+            )
+        out.append(frozenset(inst.inputs) | names)
+    return out
 
 
 class Predictor(Protocol):
@@ -225,13 +232,15 @@ class LearnedPolicy:
     _est: dict[int, float] = field(default_factory=dict)  # each node's estimate (subtree_min)
     _scale: float = 0.0
     _evidence: Evidence | None = None
-    _names: list[list[frozenset[str]]] = field(default_factory=list)  # row_names per plan
+    # Per plan: for each object, the streams whose rows read it (row_names), in order.
+    _readers: list[dict[str, list[int]]] = field(default_factory=list)
     _seen: int = 0  # nodes the refreshes have taken in
     _relevant_at: dict[tuple[int, int], frozenset[str]] = field(default_factory=dict)
     _root_costs: dict[_RootKey, StreamCost] = field(default_factory=dict)  # rows of plan nodes
     _fluent_state: dict[int, tuple[frozenset[Atom], frozenset[Atom]]] = field(
         default_factory=dict
-    )  # per state object: its fluent facts
+    )  # per state object: its fluent facts (one object for equal sets: keys compare by identity)
+    _fluent_sets: dict[frozenset[Atom], frozenset[Atom]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         c = self.config
@@ -279,14 +288,20 @@ class LearnedPolicy:
         parent = tree[node.parent]
         if parent.plan_index != node.plan_index or node.depth != parent.depth + 1:
             return None
-        if not self._names:
-            self._names = [
-                row_names(p, st, self.fluents)
-                for p, st in zip(self.skeletons, self.states, strict=True)
-            ]
-        names = self._names[node.plan_index]
-        new = set(node.outputs)
-        return [i for i in range(node.depth, len(names)) if names[i] & new]
+        if not self._readers:
+            for p, st in zip(self.skeletons, self.states, strict=True):
+                readers: dict[str, list[int]] = {}
+                for i, names in enumerate(row_names(p, st, self.fluents)):
+                    for name in names:
+                        readers.setdefault(name, []).append(i)
+                self._readers.append(readers)
+        readers = self._readers[node.plan_index]
+        outputs = list(node.outputs)
+        if len(outputs) == 1:
+            found = readers.get(outputs[0], [])
+            return found[bisect.bisect_left(found, node.depth) :]
+        stale = {i for name in outputs for i in readers.get(name, ()) if i >= node.depth}
+        return sorted(stale)
 
     def _predict(self, tree: Tree, nodes: Sequence[Node]) -> None:
         """Eq. 4 predictions for nodes that have none yet, in one batch."""
@@ -348,7 +363,8 @@ class LearnedPolicy:
         state = self.states[plan_index][i]
         facts = self._fluent_state.get(id(state))
         if facts is None or facts[0] is not state:
-            facts = (state, frozenset(a for a in state if a.predicate in self.fluents))
+            fluent = frozenset(a for a in state if a.predicate in self.fluents)
+            facts = (state, self._fluent_sets.setdefault(fluent, fluent))
             self._fluent_state[id(state)] = facts
         inputs = tuple(n if n in self.initial_values else None for n in inst.inputs)
         return inst.stream, inputs, facts[1]

@@ -192,7 +192,7 @@ class TreeSearch:
         self.deepest = 0.0  # largest share of a stream plan bound so far
         self._last_progress = 0.0
         self._plans_open = 0  # stream plans given a node under the root so far
-        self._query_cpu_s = 0.0  # this thread's CPU seconds inside the runtime's queries
+        self._query_cpu_s = 0.0  # CPU seconds of the queries the runtime answered (this thread's)
 
     # --- events ------------------------------------------------------------------------------
 
@@ -259,11 +259,10 @@ class TreeSearch:
             reused_from, outputs_, wall_s = earlier
             result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True)
         else:
-            cpu = time.thread_time()
             result = self.runtime.query(
                 inst.stream, inputs, key=(node.id, inst.stream), context=context
             )
-            self._query_cpu_s += time.thread_time() - cpu
+            self._query_cpu_s += result.cpu_s  # this thread's: the runtime's clock
         outputs = (
             dict(zip(inst.outputs, result.outputs, strict=True))
             if result.outputs is not None

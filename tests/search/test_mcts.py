@@ -86,14 +86,31 @@ def _burn(seconds: float) -> None:
 def test_the_search_cpu_counts_the_searchs_own_work_not_its_queries() -> None:
     """``search_cpu_s`` is what the search's own choices cost: CPU a sampler spends is the
     query's, CPU a policy spends is the search's."""
+    import random
+    from dataclasses import replace
 
-    class SlowRuntime:
-        def __init__(self, inner: Any) -> None:
-            self.inner = inner
+    from planner.streams import bind_streams
 
-        def query(self, *args: Any, **kwargs: Any) -> Any:
+    loaded, problem = problem_for_scene(SCENE, seed=3)
+
+    def slow(fn: Any) -> Any:
+        def burning(*args: Any, **kwargs: Any) -> Any:
             _burn(0.01)
-            return self.inner.query(*args, **kwargs)
+            return fn(*args, **kwargs)
+
+        return burning
+
+    assert loaded.spec.bindings is not None
+    slow_samplers = {
+        name: replace(adapter, fn=slow(adapter.fn))
+        for name, adapter in loaded.spec.bindings(problem, random.Random(3)).items()
+    }
+    ts = search(3)
+    ts.runtime = bind_streams(loaded.streams, slow_samplers)
+    result = ts.run(deadline=time.perf_counter() + 30)
+    assert result.solved and len(result.queries) >= 5
+    assert all(r.cpu_s >= 0.01 for _, r in result.queries)  # the samplers' CPU is the queries'
+    assert result.search_cpu_s < 0.005 * len(result.queries)  # and not the search's
 
     picks = []
 
@@ -102,12 +119,6 @@ def test_the_search_cpu_counts_the_searchs_own_work_not_its_queries() -> None:
             picks.append(1)
             _burn(0.01)
             return super().pick_plan(tree)
-
-    ts = search(3)
-    ts.runtime = SlowRuntime(ts.runtime)  # type: ignore[assignment]  # answers like a runtime
-    result = ts.run(deadline=time.perf_counter() + 30)
-    assert result.solved and len(result.queries) >= 5
-    assert result.search_cpu_s < 0.005 * len(result.queries)  # the samplers' CPU is not in it
 
     ts = search(3)
     ts.policy = SlowPolicy()

@@ -28,6 +28,7 @@ roll where it used to land, so the shipped model sees exactly the rows it was tr
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -50,8 +51,10 @@ ROOM_GRID = 9  # candidate centres per side of the platform
 FACTS_READ_MAX = 4096  # facts lists whose reading is kept (a search has one per state)
 
 FloatArray = npt.NDArray[np.float32]
-# What a facts list sets (KitchenEncoder._read_facts): indices made 1, counts, (block, pose name).
-_FactsRead = tuple[npt.NDArray[np.intp], list[float], list[tuple[int, str]]]
+# What a facts list sets (KitchenEncoder._read_facts): the state part before the poses' values
+# (present, on a platform, held, the counts), and per block with an at-pose fact, where its pose
+# goes in the state part and the pose's name.
+_FactsRead = tuple[FloatArray, list[tuple[int, str]]]
 
 
 def _numbers(value: Any, n: int, where: str) -> list[float]:
@@ -79,6 +82,15 @@ class KitchenEncoder:
     _block_index: dict[str, int] = field(init=False, repr=False, compare=False)
     _platform_index: dict[str, int] = field(init=False, repr=False, compare=False)
     _facts_read: dict[int, tuple[list[Any], _FactsRead]] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
+    _poses_read: dict[int, tuple[Any, FloatArray]] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
+    _platforms_read: dict[
+        tuple[int, str], tuple[Any, frozenset[Any], tuple[tuple[Any, Any], ...]]
+    ] = field(init=False, repr=False, compare=False, default_factory=dict)
+    _rooms: dict[tuple[Any, ...], tuple[Any, list[Any], list[float]]] = field(
         init=False, repr=False, compare=False, default_factory=dict
     )
 
@@ -117,10 +129,41 @@ class KitchenEncoder:
     def stream_features(
         self, stream: str, inputs: Sequence[JSON | None], context: Mapping[str, Any]
     ) -> Sequence[float]:
-        platform = (self.room or {})[stream]
-        if len(inputs) <= platform:
-            raise FeatureError(f"stream {stream!r}: room input {platform} is not given")
-        return room_left(inputs[0], inputs[platform], context)
+        at = (self.room or {})[stream]
+        if len(inputs) <= at:
+            raise FeatureError(f"stream {stream!r}: room input {at} is not given")
+        block, platform = inputs[0], inputs[at]
+        geometry = context.get("geometry")
+        if not isinstance(block, str) or not isinstance(geometry, Mapping):
+            return room_left(block, platform, context)
+        if not isinstance(platform, str):
+            return [1.0, 0.0, 0.0]
+        return self._room_left(block, platform, geometry, context)
+
+    def _room_left(
+        self, block: str, platform: str, geometry: Mapping[str, Any], context: Mapping[str, Any]
+    ) -> list[float]:
+        """:func:`room_left`, computed once per block, platform, geometry and the poses of the
+        blocks on the platform (not per context: placing a block elsewhere leaves it)."""
+        facts = context.get("facts", [])
+        read = self._platforms_read.get((id(facts), platform))
+        if read is None or read[0] is not facts:
+            read = (facts, *_on_platform(facts, platform))
+            if len(self._platforms_read) >= FACTS_READ_MAX:
+                self._platforms_read.clear()
+            self._platforms_read[(id(facts), platform)] = read
+        _, on, placed = read
+        values = context.get("values", {})
+        poses = [values.get(n) for b, n in placed if b != block]
+        key = (block, platform, id(geometry), on, *map(id, poses))
+        hit = self._rooms.get(key)
+        if hit is not None:
+            return hit[2]
+        room = _room(block, platform, geometry, on, poses)
+        if len(self._rooms) >= FACTS_READ_MAX:
+            self._rooms.clear()
+        self._rooms[key] = (geometry, poses, room)  # kept, so their ids are not reused
+        return room
 
     def finish_row(
         self,
@@ -155,24 +198,32 @@ class KitchenEncoder:
         values = context.get("values", {})
         if not isinstance(facts, list) or not isinstance(values, Mapping):
             raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
-        ones, counts, poses = self._read_facts(facts)
-        out[offset + ones] = 1.0
-        n_platforms = len(self.platforms)
-        per_block = n_platforms + 6
-        for block, name in poses:
+        part, poses = self._read_facts(facts)
+        out[offset : offset + len(part)] = part
+        for at, name in poses:
             pose = values.get(name)
             if isinstance(pose, Mapping) and _is_pose(pose):
-                x, y, _z, cos_yaw, sin_yaw = _pose_features(pose, f"context value {name}")
-                base = offset + block * per_block + 2 + n_platforms
-                out[base : base + 4] = [x, y, cos_yaw, sin_yaw]
-        tail = offset + self.max_blocks * per_block
-        out[tail : tail + len(self.counted)] = counts
+                out[offset + at : offset + at + 4] = self._pose_numbers(pose, name)
+
+    def _pose_numbers(self, pose: Mapping[str, Any], name: str) -> FloatArray:
+        """``[x, y, cos yaw, sin yaw]`` of an encoded pose, computed once per pose object (a
+        search encodes each bound value once; the object is kept, so its id is not reused)."""
+        hit = self._poses_read.get(id(pose))
+        if hit is not None and hit[0] is pose:
+            return hit[1]
+        x, y, _z, cos_yaw, sin_yaw = _pose_features(pose, f"context value {name}")
+        numbers = np.array([x, y, cos_yaw, sin_yaw], dtype=np.float32)
+        if len(self._poses_read) >= FACTS_READ_MAX:
+            self._poses_read.clear()
+        self._poses_read[id(pose)] = (pose, numbers)
+        return numbers
 
     def _read_facts(self, facts: list[Any]) -> _FactsRead:
-        """What ``facts`` set, apart from the poses' values: the state features they make 1
-        (present, on a platform, held), the blocks on each counted platform, and per block
-        with an ``at-pose`` fact, the name of its pose. A search's contexts share one facts list
-        per state (planner.search.queries), so each list is read once."""
+        """What ``facts`` set, apart from the poses' values: the state part with the features
+        they make 1 (present, on a platform, held) and the blocks on each counted platform,
+        and per block with an ``at-pose`` fact, where its pose's numbers go and the pose's
+        name. A search's contexts share one facts list per state (planner.search.queries), so
+        each list is read once."""
         cached = self._facts_read.get(id(facts))
         if cached is not None and cached[0] is facts:
             return cached[1]
@@ -200,11 +251,12 @@ class KitchenEncoder:
                 ones.add(base + 1 + n_platforms)
             elif predicate == "at-pose" and len(args) == 2:
                 poses.append((block_index[args[0]], args[1]))
-        read: _FactsRead = (
-            np.array(sorted(ones), dtype=np.intp),
-            [float(counts[p]) for p in self.counted],
-            poses,
-        )
+        part = np.zeros(self.scene_width, dtype=np.float32)
+        part[np.array(sorted(ones), dtype=np.intp)] = 1.0
+        tail = self.max_blocks * per_block
+        part[tail : tail + len(self.counted)] = [float(counts[p]) for p in self.counted]
+        part.flags.writeable = False
+        read: _FactsRead = (part, [(b * per_block + 2 + n_platforms, name) for b, name in poses])
         if len(self._facts_read) >= FACTS_READ_MAX:  # rows read from stored records: all new
             self._facts_read.clear()
         self._facts_read[id(facts)] = (facts, read)  # the list is kept: its id is not reused
@@ -246,6 +298,31 @@ def room_left(block: Any, platform: Any, context: Mapping[str, Any]) -> list[flo
     geometry = context.get("geometry")
     if not isinstance(geometry, Mapping) or not isinstance(platform, str):
         return [1.0, 0.0, 0.0]
+    on, placed = _on_platform(context.get("facts", []), platform)
+    values = context.get("values", {})
+    return _room(block, platform, geometry, on, [values.get(n) for b, n in placed if b != block])
+
+
+def _on_platform(facts: Any, platform: str) -> tuple[frozenset[Any], tuple[tuple[Any, Any], ...]]:
+    """The blocks on ``platform`` and, in the facts' order, the ``(block, pose name)`` of their
+    ``at-pose`` facts."""
+    lists = [f for f in facts if isinstance(f, list)]
+    on = frozenset(f[1] for f in lists if f[:1] == ["on"] and f[2:] == [platform])
+    placed = tuple(
+        (f[1], f[2]) for f in lists if f[:1] == ["at-pose"] and len(f) == 3 and f[1] in on
+    )
+    return on, placed
+
+
+def _room(
+    block: Any,
+    platform: str,
+    geometry: Mapping[str, Any],
+    on: frozenset[Any],
+    poses: Sequence[Any],
+) -> list[float]:
+    """:func:`room_left` from what it reads: the blocks on the platform, and the encoded poses
+    (or None) of those but ``block``."""
     footprints, sizes = geometry.get("platforms", {}), geometry.get("blocks", {})
     if not isinstance(footprints, Mapping) or not isinstance(sizes, Mapping):
         raise FeatureError("context geometry: expected {'platforms': {...}, 'blocks': {...}}")
@@ -254,22 +331,23 @@ def room_left(block: Any, platform: Any, context: Mapping[str, Any]) -> list[flo
         return [1.0, 0.0, 0.0]
     xmin, xmax, ymin, ymax = _numbers(box, 4, f"context geometry platform {platform!r}")
     (half,) = (v / 2 for v in _numbers([size], 1, f"context geometry block {block!r}"))
-    values = context.get("values", {})
-    facts = [f for f in context.get("facts", []) if isinstance(f, list)]
-    on = {f[1] for f in facts if f[:1] == ["on"] and f[2:] == [platform]}
-    on.discard(block)
-    centres = []
-    for fact in facts:
-        if fact[:1] == ["at-pose"] and len(fact) == 3 and fact[1] in on:
-            pose = values.get(fact[2])
-            if _is_pose(pose):
-                centres.append((float(pose["x"]), float(pose["y"])))
+    others = len(on - {block})
+    centres = [(float(p["x"]), float(p["y"])) for p in poses if _is_pose(p)]
     if xmax - xmin < 2 * half or ymax - ymin < 2 * half:
-        return [0.0, 0.0, float(len(on))]
+        return [0.0, 0.0, float(others)]
     if not centres:
-        return [0.0, ROOM_CAP, float(len(on))]
-    xs = np.linspace(xmin + half, xmax - half, ROOM_GRID)
-    ys = np.linspace(ymin + half, ymax - half, ROOM_GRID)
-    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 1, 2)
-    nearest = np.linalg.norm(grid - np.asarray(centres)[None, :, :], axis=-1).min(axis=1)
-    return [0.0, float(min(100.0 * nearest.max(), ROOM_CAP)), float(len(on))]
+        return [0.0, ROOM_CAP, float(others)]
+    xs, ys = _grid(xmin + half, xmax - half), _grid(ymin + half, ymax - half)
+    cx, cy = np.array(centres).T
+    dx2 = np.square(xs[:, None] - cx[None, :])  # (grid x, centre)
+    dy2 = np.square(ys[:, None] - cy[None, :])  # (grid y, centre)
+    nearest2 = (dx2[None, :, :] + dy2[:, None, :]).min(axis=2)  # squared, per grid point
+    return [0.0, float(min(100.0 * math.sqrt(nearest2.max()), ROOM_CAP)), float(others)]
+
+
+@functools.lru_cache(maxsize=256)
+def _grid(low: float, high: float) -> npt.NDArray[np.float64]:
+    """:data:`ROOM_GRID` candidate centres from ``low`` to ``high`` (a platform has few)."""
+    out = np.linspace(low, high, ROOM_GRID)
+    out.flags.writeable = False
+    return out
