@@ -406,21 +406,40 @@ def _check_items(v: dict[Any, Any], check_value: _Check) -> str | None:
     return None
 
 
+_PLAIN = frozenset({str, int, bool, type(None)})  # JSON leaves with nothing more to check
+
+
 def _check_json(v: Any) -> str | None:
-    """Any JSON-friendly value: str, int, finite float, bool, None, lists and str-keyed dicts."""
+    """Any JSON-friendly value: str, int, finite float, bool, None, lists and str-keyed dicts.
+    The leaves of a list or dict are checked in its loop, without a call each: a query's
+    context holds hundreds of them."""
     kind = type(v)
-    if kind is str or kind is int or kind is bool or v is None:
+    if kind in _PLAIN:
         return None
-    if isinstance(v, float):
+    if kind is float:
         return None if math.isfinite(v) else f": must be finite, got {v}"
     if kind is list:
         for i, x in enumerate(v):
+            t = type(x)
+            if t in _PLAIN or (t is float and math.isfinite(x)):
+                continue
             error = _check_json(x)
             if error is not None:
                 return f"[{i}]{error}"
         return None
     if kind is dict:
-        return _check_items(v, _check_json)
+        for k, x in v.items():
+            if type(k) is not str:
+                return f": keys must be str, got {k!r}"
+            t = type(x)
+            if t in _PLAIN or (t is float and math.isfinite(x)):
+                continue
+            error = _check_json(x)
+            if error is not None:
+                return f"[{k!r}]{error}"
+        return None
+    if isinstance(v, float):
+        return None if math.isfinite(v) else f": must be finite, got {v}"
     return f": {kind.__name__} is not JSON-friendly"
 
 

@@ -35,10 +35,17 @@ from planner.domains.spec import LoadedDomain
 from planner.events import Emitter, ModelPrediction, NodeAdded, SolutionFound, StreamQueried
 from planner.pddl.structs import Atom, Problem
 from planner.search.baseline import BaselineConfig
-from planner.search.binding import BoundPlan, bind_sequentially, plan_cost, stream_contexts
+from planner.search.binding import (
+    BoundPlan,
+    bind_sequentially,
+    plan_cost,
+    shared_states,
+    stream_contexts,
+)
 from planner.search.learned import LearnedConfig, LearnedPolicy, Predictor, StreamCost, stream_rows
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
+from planner.search.queries import remembered
 from planner.search.tree import Node
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
@@ -64,6 +71,12 @@ class PlanningTask:
     static_context: dict[str, Any] = field(default_factory=dict)
     states: list[list[frozenset[Atom]]] = field(default_factory=list)
     runtime: StreamRuntime | None = None  # set once the plans are reported, before solve()
+    # The domain's encoder, once per value object, shared by the search, its events and the
+    # learned policy (planner.search.queries.remembered).
+    encode: Callable[[Any], Any] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.encode = remembered(self.loaded.encode)
 
     @property
     def fluents(self) -> frozenset[str]:
@@ -169,7 +182,7 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
                     plan,
                     plan_states,
                     task.initial,
-                    encode=task.loaded.encode,
+                    encode=task.encode,
                     fluents=fluents,
                     static_context=task.static_context,
                     start=i,
@@ -205,7 +218,9 @@ class _TreeSearchPlanner(Planner):
         return "plan" if self.config.order == "auto" else self.config.order
 
     def prepare(self, task: PlanningTask) -> PlanningTask:
-        task.states = [stream_contexts(p, task.loaded.domain, task.problem) for p in task.plans]
+        task.states = shared_states(
+            [stream_contexts(p, task.loaded.domain, task.problem) for p in task.plans]
+        )
         if self.uses_model or self.order == "model":
             self.predictor = load_predictor(self.config, task.loaded)
         if self.predictor is not None and self.order == "model":
@@ -223,7 +238,7 @@ class _TreeSearchPlanner(Planner):
             task.samplers,
             self.policy(task, emitter),
             emitter=emitter,
-            encode=task.loaded.encode,
+            encode=task.encode,
             describe=task.loaded.codec.label,
             progress=budget.progress or (lambda _m: None),
             should_stop=budget.should_stop,
@@ -298,7 +313,7 @@ class LearnedPlanner(_TreeSearchPlanner):
             task.plans,
             task.states,
             task.initial,
-            task.loaded.encode,
+            task.encode,
             task.fluents,
             self.parts,
             on_prediction=report,

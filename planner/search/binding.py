@@ -9,7 +9,7 @@ issue 4 decides which stream to query next instead.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -61,6 +61,17 @@ def stream_contexts(plan: AbstractPlan, domain: Domain, problem: Problem) -> lis
         raise ValueError("the plan carries no first-use steps (build it with plan_abstract)")
     states = plan_states(plan, domain, problem)
     return [states[step] for step in plan.first_use]
+
+
+def shared_states(
+    states: Sequence[Sequence[frozenset[Atom]]],
+) -> list[list[frozenset[Atom]]]:
+    """``states`` (one list per plan) with one object for each distinct state: the k plans of
+    a problem pass through many of the same states, and what reads a state (query contexts,
+    feature rows, the learned policy's keys) then finds it by identity instead of comparing
+    its facts one by one."""
+    seen: dict[frozenset[Atom], frozenset[Atom]] = {}
+    return [[seen.setdefault(s, s) for s in plan_states] for plan_states in states]
 
 
 class PlanCostError(ValueError):

@@ -38,7 +38,7 @@ from planner.search.costs import (
     remaining_cost,
 )
 from planner.search.evidence import Evidence
-from planner.search.queries import query_context
+from planner.search.queries import query_context, remembered
 from planner.search.tree import ROOT, Node, Tree
 
 __all__ = [
@@ -244,7 +244,7 @@ class LearnedPolicy:
 
     def __post_init__(self) -> None:
         c = self.config
-        self.encode = _remembered(self.encode)
+        self.encode = remembered(self.encode)
         self._evidence = Evidence(_Queries(self), dead_ends=c.dead_ends)
 
     @property
@@ -495,19 +495,3 @@ class LearnedPolicy:
         """Predict the nodes a rollout made, in one batch, so every node carries a prediction
         (and a ``model_prediction`` event) even when the search ends with that rollout."""
         self._predict(tree, [n for n in nodes if n.success])
-
-
-def _remembered(encode: Callable[[Any], Any]) -> Callable[[Any], Any]:
-    """``encode`` that encodes each value object once: a search reads the same bound values in
-    the rows of every node below the one that bound them."""
-    seen: dict[int, tuple[Any, Any]] = {}
-
-    def encoded(value: Any) -> Any:
-        hit = seen.get(id(value))
-        if hit is not None and hit[0] is value:
-            return hit[1]
-        out = encode(value)
-        seen[id(value)] = (value, out)  # the value is kept, so its id is not reused
-        return out
-
-    return encoded

@@ -46,6 +46,27 @@ def _fluent_facts(
     return [[a.predicate, *a.args] for a in facts], names
 
 
+def remembered(encode: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    """``encode`` that encodes each value object once (values are immutable): a search reads
+    the same bound values in the queries, events and model rows of every node below the one
+    that bound them, and what is kept by the identity of an encoded value (feature parts) is
+    then found again. Wrapping a remembered encoder returns it, so callers share one memory."""
+    if getattr(encode, "remembers", False):
+        return encode
+    seen: dict[int, tuple[Any, Any]] = {}
+
+    def encoded(value: Any) -> Any:
+        hit = seen.get(id(value))
+        if hit is not None and hit[0] is value:
+            return hit[1]
+        out = encode(value)
+        seen[id(value)] = (value, out)  # the value is kept, so its id is not reused
+        return out
+
+    encoded.remembers = True  # type: ignore[attr-defined]  # read by remembered() above
+    return encoded
+
+
 def query_identity(stream: str, inputs: Sequence[Any], context: Mapping[str, Any]) -> str:
     """The identity of a query from its encoded inputs and its context (see the module); two
     queries with one identity give the same outcome as far as the domain can tell."""

@@ -127,6 +127,25 @@ def test_the_search_cpu_counts_the_searchs_own_work_not_its_queries() -> None:
     assert result.search_cpu_s >= 0.01 * len(picks)  # the policy's CPU is
 
 
+def test_garbage_made_before_a_search_is_still_collected_after_it() -> None:
+    """The search keeps the collector off the objects made before it (young_objects_only), and
+    gives them back: a reference cycle dropped after the search is collected."""
+    import gc
+    import weakref
+
+    class Cycle:
+        me: object = None
+
+    cycle = Cycle()
+    cycle.me = cycle
+    alive = weakref.ref(cycle)
+    result = search(3).run(deadline=time.perf_counter() + 30)
+    assert result.solved
+    del cycle
+    gc.collect()
+    assert alive() is None
+
+
 def _shape(ts: TreeSearch) -> list[list[object]]:
     return [
         [n.id, n.parent, n.plan_index, n.depth, n.success, n.visits, round(n.value, 6)]
