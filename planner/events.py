@@ -407,17 +407,29 @@ def _check_items(v: dict[Any, Any], check_value: _Check) -> str | None:
 
 
 _PLAIN = frozenset({str, int, bool, type(None)})  # JSON leaves with nothing more to check
+CHECKED_MIN = 8  # lists and dicts this long are remembered once found JSON-friendly
+CHECKED_MAX = 65_536  # containers remembered at most (forgotten all at once beyond)
+# Containers found JSON-friendly, by identity (kept, so their ids are not reused): a search's
+# events share them (a state's facts list, the domain's static context), and a payload is
+# never changed once emitted, so one check holds for every event that carries them.
+_checked: dict[int, Any] = {}
 
 
 def _check_json(v: Any) -> str | None:
     """Any JSON-friendly value: str, int, finite float, bool, None, lists and str-keyed dicts.
-    The leaves of a list or dict are checked in its loop, without a call each: a query's
-    context holds hundreds of them."""
+    The leaves of a list or dict are checked in its loop, without a call each (a query's
+    context holds hundreds of them), and a long container already checked is not again."""
     kind = type(v)
     if kind in _PLAIN:
         return None
     if kind is float:
         return None if math.isfinite(v) else f": must be finite, got {v}"
+    if kind is not list and kind is not dict:
+        if isinstance(v, float):
+            return None if math.isfinite(v) else f": must be finite, got {v}"
+        return f": {kind.__name__} is not JSON-friendly"
+    if _checked.get(id(v)) is v:
+        return None
     if kind is list:
         for i, x in enumerate(v):
             t = type(x)
@@ -426,8 +438,7 @@ def _check_json(v: Any) -> str | None:
             error = _check_json(x)
             if error is not None:
                 return f"[{i}]{error}"
-        return None
-    if kind is dict:
+    else:
         for k, x in v.items():
             if type(k) is not str:
                 return f": keys must be str, got {k!r}"
@@ -437,10 +448,11 @@ def _check_json(v: Any) -> str | None:
             error = _check_json(x)
             if error is not None:
                 return f"[{k!r}]{error}"
-        return None
-    if isinstance(v, float):
-        return None if math.isfinite(v) else f": must be finite, got {v}"
-    return f": {kind.__name__} is not JSON-friendly"
+    if len(v) >= CHECKED_MIN:
+        if len(_checked) >= CHECKED_MAX:
+            _checked.clear()
+        _checked[id(v)] = v
+    return None
 
 
 # --- (de)serialisation ---------------------------------------------------------------------

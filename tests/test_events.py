@@ -212,6 +212,19 @@ def test_malformed_json_and_wrong_field_types_are_value_errors() -> None:
         event_from_json(event_to_json(EXAMPLES["node_visited"]).replace("-4.75", "NaN"))
 
 
+def test_a_long_context_is_checked_deep_down_every_time_it_is_bad() -> None:
+    """A search's events share long lists (a state's facts): one found good is not walked
+    again, but one with a bad leaf deep inside is refused each time, naming where."""
+    facts = [["on", f"b{i}", "table"] for i in range(20)]
+    example = EXAMPLES["stream_queried"]
+    for _ in range(2):
+        dataclasses.replace(example, context={"facts": facts})
+    bad = [*facts, ["at", float("nan")]]
+    for _ in range(2):
+        with pytest.raises(ValueError, match=r"context\['facts'\]\[20\]\[1\]: must be finite"):
+            dataclasses.replace(example, context={"facts": bad})
+
+
 @pytest.mark.parametrize(
     ("cls", "fields", "message"),
     [

@@ -664,8 +664,16 @@ class Featurizer:
         the input slots by the input objects, the stream part by those and the context's
         make-up, the state part by the make-up (:func:`_makeup`). In a search most rows share
         all three with rows made before; contexts and inputs are read, never changed."""
+        return self._row(stream, inputs, context, _makeup(context))
+
+    def _row(
+        self,
+        stream: str,
+        inputs: Sequence[Any | None],
+        context: Context,
+        makeup: tuple[Any, ...],
+    ) -> FloatArray:
         layout = self._layouts.get(stream)
-        makeup = _makeup(context)
         parts: list[FloatArray] = []
         if layout is not None:
             if len(inputs) != len(layout.slots):
@@ -756,8 +764,15 @@ class Featurizer:
     def matrix(
         self, stream: str, queries: Iterable[tuple[Sequence[Any | None], Context]]
     ) -> FloatArray:
-        """Rows of many ``(inputs, context)`` queries of one stream, shape ``(n, width)``."""
-        rows = [self.row(stream, inputs, context) for inputs, context in queries]
+        """Rows of many ``(inputs, context)`` queries of one stream, shape ``(n, width)``.
+        Queries made in one state share a context object: its make-up is read once."""
+        makeups: dict[int, tuple[Any, ...]] = {}  # by context object, alive during the call
+        rows = []
+        for inputs, context in queries:
+            makeup = makeups.get(id(context))
+            if makeup is None:
+                makeup = makeups[id(context)] = _makeup(context)
+            rows.append(self._row(stream, inputs, context, makeup))
         if not rows:
             return np.zeros((0, self.width(stream)), dtype=np.float32)
         return np.stack(rows)

@@ -33,11 +33,7 @@ class ModelPredictor:
         out: list[StreamCost | None] = [None] * len(rows)
         for stream, indices in by_stream.items():
             pred = self.model.predict_queries(stream, [(rows[i][1], rows[i][2]) for i in indices])
-            for j, i in enumerate(indices):
-                out[i] = StreamCost(
-                    float(pred.p_s[j]),
-                    float(pred.r_s[j]),
-                    float(pred.r_f[j]),
-                    float(pred.r_m[j]),
-                )
+            columns = (pred.p_s.tolist(), pred.r_s.tolist(), pred.r_f.tolist(), pred.r_m.tolist())
+            for i, p_s, r_s, r_f, r_m in zip(indices, *columns, strict=True):
+                out[i] = StreamCost(p_s, r_s, r_f, r_m)
         return [c for c in out if c is not None]
