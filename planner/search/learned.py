@@ -318,7 +318,6 @@ class LearnedPolicy:
         opened: dict[_RootKey, int] = {}  # a plan node's row in this batch, by what it reads
         for node in todo:
             stale = self._stale(tree, node, slots.keys())
-            values = {**self.initial_values, **tree.bindings(node.id)}
             count = len(self.skeletons[node.plan_index].stream_plan)
             fresh: Sequence[int] = range(node.depth, count) if stale is None else stale
             known: dict[int, int | StreamCost] = {}
@@ -339,6 +338,7 @@ class LearnedPolicy:
             )
             at.update(known)
             if fresh:
+                values = {**self.initial_values, **tree.bindings(node.id)}
                 rows += self._rows(node.plan_index, node.depth, values, fresh)
             parent: Sequence[int | StreamCost] = ()
             if stale is not None and node.parent is not None:
