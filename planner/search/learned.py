@@ -133,17 +133,20 @@ class LearnedConfig:
     the failures depend on are priced as if every continuation fails (backjumping), and a dead
     end counts as a failed attempt of its parent's query.
 
-    Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4:
-    without it 8 timeouts in 40 and planning 1325% more (745% to 1931% more); not measurable
-    on kitchen-4 (13d3942, 40 seeds: total 1.6% more, 1.1% less to 4.9% more)."""
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4 (a73daea, 40
+    seeds): without it 8 timeouts in 40 and planning 1325% more (745% to 1931% more); not
+    measurable on kitchen-4 (13d3942, 40 seeds: total 1.6% more, 1.1% less to 4.9% more) nor
+    on kitchen-8 (f794838, 40 seeds: total 1.1% more, 1.0% less to 4.7% more)."""
 
     subtree_min: bool = True
     """A node is estimated by the lowest Q in its subtree, dead ends left out (progress along
     a plan counts); off: by its own Q.
 
-    Measured at a73daea (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4:
-    planning 105% more without it (63% to 156% more); on kitchen-4 (13d3942, 40 seeds) its
-    plans execute 5.0% longer without it (0.4% to 10.4% longer)."""
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on tabletop-4 (a73daea, 40
+    seeds): planning 105% more without it (63% to 156% more); helps on kitchen-8 (f794838, 40
+    seeds): total 8.2% more without it (1.4% to 15.4% more), its plans executing 7.0% longer
+    (1.0% to 13.3% longer); on kitchen-4 (13d3942, 40 seeds) plans execute 5.0% longer
+    without it (0.4% to 10.4% longer)."""
 
     model_order: bool = True
     """Each stream plan is reordered before the search by the model's predictions: cheap tests
