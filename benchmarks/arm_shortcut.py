@@ -92,21 +92,17 @@ def full_trial(scene: str, seed: int, planner: str, steps: int, budget: float) -
     """One whole run with the arm paths shortened with ``steps`` partial shortcuts."""
     from dataclasses import replace
 
-    import planner.domains.kitchen.samplers as ks
-    from planner.runs import RunConfig, preload_libraries, run
+    from planner.api import solve
+    from planner.domains import load_domain
+    from planner.domains.kitchen import with_samplers
+    from planner.domains.kitchen.samplers import SamplerConfig
+    from planner.runs import RunConfig, preload_libraries
 
-    base = ks.SamplerConfig()
+    base = SamplerConfig()
     config = replace(base, arm_motion=replace(base.arm_motion, shortcut_steps=steps))
-    original = ks.KitchenSamplers.__init__
-
-    def init(self: Any, geometry: Any, rng: Any, **kw: Any) -> None:
-        kw.setdefault("config", config)
-        original(self, geometry, rng, **kw)
-
-    ks.KitchenSamplers.__init__ = init  # type: ignore[method-assign]
     run_config = RunConfig(scene=scene, seed=seed, planner=planner, budget_s=budget)
     preload_libraries(run_config)
-    result, _, _ = run(run_config)
+    result = solve(run_config, loaded=with_samplers(load_domain("kitchen"), config)).result
     return {
         "solved": result.solved,
         "planning": result.planning_s,

@@ -26,7 +26,7 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
-from planner.runs import PLANNERS, RunConfig, run
+from planner.runs import PLANNERS, RunConfig
 from planner.sim.pr2_model import BASE_VELOCITY
 from planner.sim.transforms import wrap_angle
 
@@ -70,21 +70,13 @@ def _trial(
     job: tuple[str, int, str, str, str, float],
 ) -> tuple[int, str, dict[str, float] | None]:
     scene, seed, field, setting, planner, budget = job
-    import planner.domains.kitchen.samplers as ks
+    from planner.api import solve
+    from planner.domains import load_domain
+    from planner.domains.kitchen import with_samplers
 
-    original = ks.KitchenSamplers.__init__
-    config = _config(field, setting)
-
-    def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
-        kw.setdefault("config", config)
-        original(self, geometry, rng, **kw)
-
-    ks.KitchenSamplers.__init__ = init  # type: ignore[method-assign]
-    try:
-        cfg = RunConfig(scene=scene, seed=seed, planner=planner, budget_s=budget)
-        result, _, _ = run(cfg)
-    finally:
-        ks.KitchenSamplers.__init__ = original  # type: ignore[method-assign]
+    kitchen = with_samplers(load_domain("kitchen"), _config(field, setting))
+    cfg = RunConfig(scene=scene, seed=seed, planner=planner, budget_s=budget)
+    result = solve(cfg, loaded=kitchen).result
     if result.bound is None or result.execution_s is None:
         return seed, setting, None
     base, arm, bound = _breakdown(dict(result.bound.values))

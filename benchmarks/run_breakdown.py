@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import argparse
 import logging
-import random
 import sys
 from collections import Counter
-from typing import Any
 
-from planner.runs import PLANNERS, RunConfig, run
+from planner.api import solve
+from planner.runs import PLANNERS, RunConfig
 
 
 def main() -> int:
@@ -37,25 +36,22 @@ def main() -> int:
     if (args.field is None) != (args.value is None):
         parser.error("--field and --value go together")
     logging.basicConfig(level=logging.WARNING)
+    loaded = None
     if args.field is not None:
-        import planner.domains.kitchen.samplers as ks
+        from planner.domains import load_domain
+        from planner.domains.kitchen import with_samplers
+        from planner.domains.kitchen.samplers import SamplerConfig
 
         try:
-            config = ks.SamplerConfig().with_text(args.field, args.value)
+            config = SamplerConfig().with_text(args.field, args.value)
         except ValueError as exc:
             parser.error(f"--field {args.field!r} --value {args.value!r}: {exc}")
-        original = ks.KitchenSamplers.__init__
-
-        def init(self: Any, geometry: Any, rng: random.Random, **kw: Any) -> None:
-            kw.setdefault("config", config)
-            original(self, geometry, rng, **kw)
-
-        ks.KitchenSamplers.__init__ = init  # type: ignore[method-assign]
+        loaded = with_samplers(load_domain("kitchen"), config)
     config_run = RunConfig(
         scene=args.scene, seed=args.seed, planner=args.planner, budget_s=args.budget
     )
     if args.db is None:
-        result, _, _ = run(config_run)
+        result = solve(config_run, loaded=loaded).result
     else:
         from planner.store import RunStore, StoreSink
 
@@ -63,7 +59,7 @@ def main() -> int:
         run_id = store.create_run(args.scene, args.seed, args.planner, {"budget_s": args.budget})
         sink = StoreSink(store, run_id)
         try:
-            result, _, _ = run(config_run, sink=sink, run_id=run_id)
+            result = solve(config_run, loaded=loaded, sink=sink, run_id=run_id).result
         finally:
             sink.close()
             store.close()

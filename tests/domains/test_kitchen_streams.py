@@ -24,6 +24,8 @@ from planner.streams import Failure, StreamContext
 
 pytestmark = pytest.mark.slow
 
+TUTORIAL = Path(__file__).resolve().parents[2] / "examples" / "tabletop2d"
+
 
 @pytest.fixture(scope="module")
 def kitchen1() -> tuple[object, object, BoundPlan]:
@@ -292,3 +294,20 @@ def test_ik_stands_where_the_robot_gets_soonest() -> None:
     # poses a straight line makes look near on the far side of the table.
     assert statistics.mean(around_routes) < 0.85 * statistics.mean(blind_routes)
     assert statistics.mean(around_routes) < statistics.mean(near_routes)
+
+
+def test_with_samplers_runs_the_kitchen_with_another_sampler_config(
+    kitchen1: tuple[object, object, BoundPlan],
+) -> None:
+    from planner.domains import load_domain
+    from planner.domains.kitchen import with_samplers
+
+    loaded, problem, bound = kitchen1
+    starved = with_samplers(loaded, SamplerConfig(placement_attempts=0))  # type: ignore[arg-type]
+    runtime = starved.runtime(problem, seed=1)  # type: ignore[arg-type]
+    again, queries = bind_sequentially(bound.skeleton, starved.domain, problem, runtime)  # type: ignore[arg-type]
+    assert again is None  # no placement can be drawn, so the plan never binds
+    failed = {q.stream for q in queries if not q.success}
+    assert failed == {"sample-placement"}
+    with pytest.raises(ValueError, match="takes the kitchen"):
+        with_samplers(load_domain(str(TUTORIAL)), SamplerConfig())

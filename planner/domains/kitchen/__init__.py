@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import random
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.abstract.skeleton import GroundAction
 from planner.domains.kitchen.codec import VALUE_TYPES
@@ -23,9 +24,12 @@ from planner.domains.kitchen.problem import (
     static_context,
 )
 from planner.domains.kitchen.view import KitchenView
-from planner.domains.spec import DomainSpec, PlanCheck
+from planner.domains.spec import DomainSpec, LoadedDomain, PlanCheck
 from planner.pddl.structs import Problem
 from planner.streams.adapters import StreamAdapter
+
+if TYPE_CHECKING:
+    from planner.domains.kitchen.samplers import SamplerConfig
 
 MODEL = Path(__file__).resolve().parent / "model.pt"  # the shipped model (docs/learning.md)
 
@@ -34,6 +38,20 @@ def _bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapte
     from planner.domains.kitchen.samplers import bindings  # pybullet only when sampling
 
     return bindings(problem, rng)
+
+
+def with_samplers(loaded: LoadedDomain, config: SamplerConfig) -> LoadedDomain:
+    """The loaded kitchen with its samplers set by ``config`` instead of the defaults: for
+    probes that compare sampler settings (pass it to :func:`planner.api.solve` as ``loaded``)."""
+
+    def bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
+        from planner.domains.kitchen.samplers import bindings as kitchen_bindings
+
+        return kitchen_bindings(problem, rng, config)
+
+    if loaded.spec.name != DOMAIN.name:
+        raise ValueError(f"with_samplers takes the kitchen, got domain {loaded.spec.name!r}")
+    return replace(loaded, spec=replace(loaded.spec, bindings=bindings))
 
 
 def validate(
@@ -73,4 +91,12 @@ DOMAIN = DomainSpec(
     unread={"sample-placement": ("at-conf", "can-move", "holding")},
 )
 
-__all__ = ["ARM", "DOMAIN", "GEOMETRY_KEY", "MODEL", "START_CONF", "initial_pose_name"]
+__all__ = [
+    "ARM",
+    "DOMAIN",
+    "GEOMETRY_KEY",
+    "MODEL",
+    "START_CONF",
+    "initial_pose_name",
+    "with_samplers",
+]

@@ -487,12 +487,15 @@ class KitchenSamplers:
         return (Trajectory(q1, q2, tuple(segments), holding),)
 
 
-def bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
-    """The kitchen's samplers for ``problem`` (which carries its geometry in ``values``)."""
+def bindings(
+    problem: Problem, rng: random.Random, config: SamplerConfig = SamplerConfig()
+) -> Mapping[str, StreamAdapter]:
+    """The kitchen's samplers for ``problem`` (which carries its geometry in ``values``), set by
+    ``config``."""
     geometry = problem.values.get(GEOMETRY_KEY)
     if not isinstance(geometry, KitchenGeometry):
         raise ValueError("a kitchen problem must be built from a scene (its geometry is missing)")
-    s = KitchenSamplers(geometry, rng)
+    s = KitchenSamplers(geometry, rng, config=config)
     return {
         "sample-grasp": from_fn(s.sample_grasp),
         "sample-placement": from_fn(s.sample_placement, context=True),
