@@ -248,9 +248,11 @@ class TreeSearch:
     def _labels(self, encoded: list[Any]) -> list[str]:
         return [] if self.describe is None else [self.describe(v) for v in encoded]
 
-    # --- steps -------------------------------------------------------------------------------
+    # --- steps: a search is these two, in the order its policy picks (:meth:`run`); a caller
+    # may also take them by hand, as the tests do ----------------------------------------------
 
-    def _open_plan(self, index: int) -> Node:
+    def open_plan(self, index: int) -> Node:
+        """Open skeleton ``index``: a new child of the root, with nothing bound yet."""
         node = self.tree.add(ROOT, plan_index=index, depth=0, success=True)
         self._plans_open += 1
         self._added(node)
@@ -263,7 +265,7 @@ class TreeSearch:
         encoded = [self.encode(v) for v in inputs]
         return query_identity(stream, encoded, self._context_json(context))
 
-    def _query(self, node: Node) -> Node:
+    def query(self, node: Node) -> Node:
         """Query the next stream of ``node``'s plan once; the result becomes a child."""
         plan = self.skeletons[node.plan_index]
         inst = plan.stream_plan[node.depth]
@@ -374,7 +376,7 @@ class TreeSearch:
         cpu_start, query_cpu_start = time.thread_time(), self._query_cpu_s
         first = min(self.policy.initial_plans(len(self.skeletons)), len(self.skeletons))
         while self._plans_open < first:
-            self._open_plan(self._plans_open)
+            self.open_plan(self._plans_open)
         iterations = 0
         status: Status = "timeout"
         solution: Node | None = None
@@ -388,7 +390,7 @@ class TreeSearch:
             iterations += 1
             tree = self.tree
             if self.policy.add_plan(tree, self._plans_open, len(self.skeletons)):
-                node = self._open_plan(self._plans_open)
+                node = self.open_plan(self._plans_open)
             else:
                 node = self.policy.pick_plan(tree)
             made = len(tree.nodes)
@@ -397,11 +399,11 @@ class TreeSearch:
                 if self._complete(node):
                     leaf = node
                 elif self.policy.expand(tree, node):
-                    child = self._query(node)
+                    child = self.query(node)
                     while child.success and not self._complete(child):
                         if time.perf_counter() >= deadline:
                             break
-                        child = self._query(child)  # simulation: bind what follows once
+                        child = self.query(child)  # simulation: bind what follows once
                     leaf = child
                 else:
                     node = self.policy.pick_child(tree, node)

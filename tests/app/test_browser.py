@@ -428,10 +428,10 @@ def _record_reuse_run(db: Path) -> str:
     assert search.emitter is not None
     search.emitter.emit(RunStarted, scene="visit", seed=0, planner="baseline", config={})
     search.emitter.emit(AbstractPlansFound, plans=plan_summaries(search.skeletons), seconds=0.01)
-    top = search._open_plan(0)
-    first, second = search._query(top), search._query(top)
-    search._query(first)
-    search._query(second)  # the same motion from the other IK child: reused
+    top = search.open_plan(0)
+    first, second = search.query(top), search.query(top)
+    search.query(first)
+    search.query(second)  # the same motion from the other IK child: reused
     queries = len(search.queries)
     search.emitter.emit(
         RunFinished,

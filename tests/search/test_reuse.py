@@ -92,13 +92,13 @@ def test_the_same_motion_in_another_branch_is_reused_and_a_retry_is_not() -> Non
     search, motions = make(sink)
     plan = search.skeletons[0]
     assert [s.stream for s in plan.stream_plan] == ["ik", "plan-motion"]
-    top = search._open_plan(0)
-    first, second = search._query(top), search._query(top)  # two IK children, same output
-    made = search._query(first)
-    again = search._query(second)  # the same motion, same world, in another branch
+    top = search.open_plan(0)
+    first, second = search.query(top), search.query(top)  # two IK children, same output
+    made = search.query(first)
+    again = search.query(second)  # the same motion, same world, in another branch
     assert motions == [("q0", "conf-at-a")]  # the sampler ran once
     assert again.success and again.outputs == made.outputs
-    retry = search._query(second)  # asking the same node again wants a new sample
+    retry = search.query(second)  # asking the same node again wants a new sample
     assert len(motions) == 2 and retry.outputs != made.outputs
     queried = [e for e in sink.events if isinstance(e, StreamQueried)]
     assert [e.reused_from for e in queried] == [None, None, None, made.id, None]
@@ -113,10 +113,10 @@ def test_a_reused_result_leaves_no_training_row(tmp_path: Path) -> None:
     run_id = store.create_run("visit", 0, "baseline", {})
     sink = StoreSink(store, run_id)
     search, _ = make(sink, run_id)
-    top = search._open_plan(0)
-    first, second = search._query(top), search._query(top)
-    search._query(first)
-    search._query(second)
+    top = search.open_plan(0)
+    first, second = search.query(top), search.query(top)
+    search.query(first)
+    search.query(second)
     sink.close()
     rows = store.stream_queries(run_ids=[run_id])
     assert [r.stream for r in rows] == ["ik", "ik", "plan-motion"]
@@ -126,8 +126,8 @@ def test_a_reused_result_leaves_no_training_row(tmp_path: Path) -> None:
 def test_without_reuse_every_query_runs_its_sampler() -> None:
     search, motions = make()
     search.reuse = False
-    top = search._open_plan(0)
-    first, second = search._query(top), search._query(top)
-    search._query(first)
-    search._query(second)
+    top = search.open_plan(0)
+    first, second = search.query(top), search.query(top)
+    search.query(first)
+    search.query(second)
     assert len(motions) == 2
