@@ -152,10 +152,9 @@ def young_objects_only() -> Iterator[None]:
     (:func:`gc.freeze`; :func:`gc.unfreeze` after, so they are collected again as before).
 
     A run's set-up leaves millions of objects that live as long as it does (the simulator, the
-    models, the problem); a full collection walks all of them, about 0.2 s in the kitchen, and
-    Python starts one whenever enough objects have piled up, so a search paid it at random
-    points: on kitchen-8 seed 1003, one of the run's three full collections fell in the search
-    and doubled the policy's own seconds. Frozen, a collection walks only the search's own
+    models, the problem); a full collection walks all of them, and Python starts one whenever
+    enough objects have piled up, so a search paid for it at random points and its own seconds
+    varied with where the collections fell. Frozen, a collection walks only the search's own
     objects. Nothing is kept longer: unreachable objects are freed by reference counting as
     usual, and the frozen ones are collectable again after the block."""
     gc.freeze()
