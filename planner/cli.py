@@ -36,6 +36,7 @@ from planner.domains import (
     scene_refs,
 )
 from planner.pddl import PDDLError, Problem, StreamSet
+from planner.pddl.check import check_files
 from planner.planners import DEFAULT_PLANNER, PLANNERS, get_planner
 from planner.plans import PlanFileError
 from planner.scene import SceneError
@@ -253,6 +254,20 @@ def build_parser() -> argparse.ArgumentParser:
     re.add_argument("--out", type=Path, default=Path("scene.png"))
     re.add_argument("--width", type=int, default=960)
     re.add_argument("--height", type=int, default=720)
+
+    ck = sub.add_parser(
+        "check",
+        help="load PDDL(Stream) files and list every declaration inferred from a use",
+        description="Load domain, stream and problem files as the planner would (files are "
+        "told apart by their header; a folder stands for its .pddl files) and list every "
+        "predicate or function declared by its use and every repeated declaration accepted "
+        "(PDDLStream's leniency). Exit status 0 when every file loads, 1 when one does not.",
+    )
+    ck.add_argument("paths", nargs="+", help="PDDL files or folders (a domain folder)")
+    ck.add_argument(
+        "--strict", action="store_true", help="refuse undeclared names and repeated declarations"
+    )
+    ck.add_argument("--json", action="store_true", help="machine-readable output")
 
     sc = sub.add_parser("scenes", help="list the known scenes and their domains")
     sc.add_argument("--domain", action="append", help="also this domain folder's scenes")
@@ -698,6 +713,26 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_check(args: argparse.Namespace) -> int:
+    checks = check_files(args.paths, strict=args.strict)
+    if args.json:
+        print(json.dumps([c.to_json() for c in checks], indent=2))
+        return 0 if all(c.ok for c in checks) else 1
+    for c in checks:
+        if not c.ok:
+            print(f"{c.path}: does not load: {c.error}")
+            continue
+        inferred = f" ({len(c.inferred)} inferred)" if c.inferred else ""
+        print(f"{c.path}: {c.summary}{inferred}")
+        for i in c.inferred:
+            print(f"  {i.place}: warning: {i.message}")
+    loaded = sum(c.ok for c in checks)
+    total = sum(len(c.inferred) for c in checks)
+    print(f"{loaded} of {len(checks)} files load; {total} declarations inferred", end="")
+    print(" (declare them to load with --strict)" if total else "")
+    return 0 if loaded == len(checks) else 1
+
+
 def cmd_domains(_: argparse.Namespace) -> int:
     for info in domain_infos():
         state = info.directory if info.error is None else f"NOT LOADED: {info.error}"
@@ -745,6 +780,7 @@ COMMANDS = {
     "render": cmd_render,
     "scenes": cmd_scenes,
     "domains": cmd_domains,
+    "check": cmd_check,
     "serve": cmd_serve,
 }
 

@@ -25,7 +25,7 @@ from planner.abstract.skeleton import (
     recover_stream_plan,
 )
 from planner.abstract.topk import DEFAULT_TOPK, TOPK_PLANNERS, get_topk_planner
-from planner.pddl.structs import Atom, Domain, Problem, StreamSet
+from planner.pddl.structs import Atom, Domain, Problem, StreamSet, problem_predicates
 
 log = logging.getLogger(__name__)
 
@@ -145,6 +145,7 @@ def plan_abstract(
     """
     say = progress or (lambda _msg: None)
     t0 = time.perf_counter()
+    domain = domain.declaring(problem_predicates(domain, problem))  # the problem's own facts
     inst = instantiate(
         streams, problem, max_levels=config.max_levels, max_instances=config.max_instances
     )

@@ -33,8 +33,7 @@ from pathlib import Path
 from types import ModuleType
 
 from planner.domains.spec import DomainSpec, LoadedDomain
-from planner.pddl.parser import load_domain as parse_domain
-from planner.pddl.parser import load_streams
+from planner.pddl.parser import load_pddlstream
 from planner.pddl.structs import Problem
 from planner.scene import SCENES_DIR, Scene, SceneError, known_scenes, load_scene
 from planner.values import ValueCodec, ValueTypeError, check_value_types
@@ -213,8 +212,20 @@ def _load(spec: DomainSpec, directory: Path, source: str) -> LoadedDomain:
         cached = _cache.get(key)
         if cached is not None and cached.spec is spec:
             return cached
-    domain = parse_domain(directory / "domain.pddl")
-    streams = load_streams(directory / "stream.pddl", domain)
+    domain, streams = load_pddlstream(
+        directory / "domain.pddl", directory / "stream.pddl", strict=spec.strict
+    )
+    inferred = len(domain.inferred) + len(streams.inferred)
+    if inferred:
+        log.warning(
+            "domain %s: %d declaration%s inferred from use in %s (PDDLStream's leniency); "
+            "`tamp check %s` lists them",
+            spec.name,
+            inferred,
+            "" if inferred == 1 else "s",
+            directory,
+            directory,
+        )
     known = {s.name for s in streams.streams}
     unknown = sorted(set(spec.unread) - known)
     if unknown:

@@ -78,6 +78,9 @@ class DomainSpec:
     # order, planner/search/order.py, need not bind the objects they name first).
     unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     directory: Path | None = None  # where its PDDL files are; None: the module's folder
+    # Refuse what PDDLStream's leniency accepts (undeclared predicates and functions, repeated
+    # declarations; `tamp check` lists them); False: accept them with a warning
+    strict: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.replace("-", "_").isidentifier():

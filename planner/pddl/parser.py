@@ -38,6 +38,8 @@ from planner.pddl.structs import (
     FunctionDecl,
     FunctionTerm,
     Imply,
+    Inference,
+    InferenceKind,
     Literal,
     Not,
     Or,
@@ -113,6 +115,11 @@ class _Reader:
     def where(self, node: Node) -> str:
         line, column = self.source.position(node.token)
         return f"line {line}, column {column}"
+
+    def place(self, node: Node) -> str:
+        """``file:line:column`` of ``node``."""
+        line, column = self.source.position(node.token)
+        return f"{self.file}:{line}:{column}"
 
     def line(self, node: SList) -> int:
         return node.line
@@ -248,7 +255,7 @@ class _Scope:
     """What a formula may mention: declared predicates, variables (with types), objects,
     numeric functions. (A plain class: one is made per stream of a large file.)"""
 
-    __slots__ = ("functions", "objects", "owner", "predicates", "variables")
+    __slots__ = ("declarer", "functions", "objects", "owner", "predicates", "variables")
 
     def __init__(
         self,
@@ -257,17 +264,124 @@ class _Scope:
         objects: set[str],
         owner: str,
         functions: dict[str, FunctionDecl] | None = None,
+        declarer: _Declarer | None = None,
     ) -> None:
         self.predicates = predicates
         self.variables = variables
         self.objects = objects
         self.owner = owner
-        self.functions = functions or {}
+        self.functions = functions if functions is not None else {}
+        self.declarer = declarer
 
     def with_variables(self, names: Iterable[TypedName]) -> _Scope:
         inner = dict(self.variables)
         inner.update((t.name, t) for t in names)
-        return _Scope(self.predicates, inner, self.objects, self.owner, self.functions)
+        return _Scope(
+            self.predicates, inner, self.objects, self.owner, self.functions, self.declarer
+        )
+
+
+STRICT_HINT = "without --strict (strict=False) it is declared by its first use"
+
+
+def one_edit_apart(a: str, b: str) -> bool:
+    """Whether ``a`` becomes ``b`` by one inserted, deleted, replaced or swapped letter (a
+    likely typo: 'fre' for 'free'); names shorter than three letters never are."""
+    if a == b or min(len(a), len(b)) < 3 or abs(len(a) - len(b)) > 1:
+        return False
+    if len(a) == len(b):
+        diff = [i for i, (x, y) in enumerate(zip(a, b, strict=True)) if x != y]
+        if len(diff) == 1:
+            return True
+        i = diff[0]
+        return len(diff) == 2 and diff[1] == i + 1 and a[i] == b[i + 1] and a[i + 1] == b[i]
+    short, long = (a, b) if len(a) < len(b) else (b, a)
+    i = 0
+    while i < len(short) and short[i] == long[i]:
+        i += 1
+    return short[i:] == long[i + 1 :]
+
+
+class _Declarer:
+    """PDDLStream's leniency: a predicate or function that is used but not declared is
+    declared by its first use (its arity from that use) and recorded as an :class:`Inference`;
+    a later use with another arity is an error naming both places. With ``strict`` every such
+    use is an error instead."""
+
+    def __init__(
+        self,
+        predicates: dict[str, Predicate],
+        functions: dict[str, FunctionDecl],
+        *,
+        strict: bool,
+        places: dict[str, str] | None = None,
+    ) -> None:
+        self.predicates = predicates
+        self.functions = functions
+        self.strict = strict
+        self.inferred: list[Inference] = []
+        self.new_predicates: list[Predicate] = []
+        self.new_functions: list[FunctionDecl] = []
+        # name -> where it was declared, or first used when that declared it; functions
+        # under "(function NAME)"
+        self.places: dict[str, str] = dict(places or {})
+
+    def origin(self, name: str, *, function: bool = False) -> str:
+        """`` (declared at PLACE)`` for an error about ``name``, or nothing when unknown."""
+        place = self.places.get(f"(function {name})" if function else name)
+        return f" ({place})" if place else ""
+
+    def _record(
+        self,
+        reader: _Reader,
+        node: Node,
+        kind: InferenceKind,
+        name: str,
+        arity: int,
+        use: str,
+        known: Iterable[str],
+    ) -> None:
+        line, column = reader.source.position(node.token)
+        # A typo is likely where an action or a derived predicate uses a name one letter away
+        # from a declared one; stream files and problems declaring static facts by use are
+        # PDDLStream's idiom, and their names often differ by a letter ('cash', 'mcash').
+        typo_prone = use.startswith(("action ", "derived predicate "))
+        near = next((k for k in sorted(known) if typo_prone and one_edit_apart(name, k)), "")
+        self.inferred.append(Inference(kind, name, arity, reader.file, line, column, use, near))
+
+    def predicate(
+        self, reader: _Reader, node: SList, name: str, arity: int, owner: str
+    ) -> Predicate:
+        if self.strict:
+            raise reader.error(
+                node,
+                f"undeclared predicate {name!r} in {owner} (declare it in the domain's "
+                f":predicates; {STRICT_HINT})",
+            )
+        self._record(reader, node, "predicate", name, arity, owner, self.predicates)
+        pred = Predicate(name, tuple(TypedName(f"?x{i}") for i in range(arity)))
+        self.predicates[name] = pred
+        self.new_predicates.append(pred)
+        self.places[name] = f"declared by its use in {owner} at {reader.place(node)}"
+        return pred
+
+    def function(
+        self, reader: _Reader, node: SList, name: str, arity: int, owner: str
+    ) -> FunctionDecl:
+        if self.strict:
+            raise reader.error(
+                node,
+                f"undeclared function {name!r} in {owner} (declare it in the domain's "
+                f":functions; {STRICT_HINT})",
+            )
+        self._record(reader, node, "function", name, arity, owner, self.functions)
+        decl = FunctionDecl(name, tuple(TypedName(f"?x{i}") for i in range(arity)))
+        self.functions[name] = decl
+        self.new_functions.append(decl)
+        self.places[f"(function {name})"] = (
+            f"declared by its use in {owner} at {reader.place(node)}"
+        )
+        return decl
 
 
 def _check_term(reader: _Reader, arg: str, node: Node, scope: _Scope) -> None:
@@ -302,10 +416,14 @@ def _atom(reader: _Reader, node: Node, scope: _Scope, *, allow_equality: bool) -
     else:
         pred = scope.predicates.get(name)
         if pred is None:
-            raise reader.error(lst, f"undeclared predicate {name!r} in {scope.owner}")
+            if scope.declarer is None:
+                raise reader.error(lst, f"undeclared predicate {name!r} in {scope.owner}")
+            pred = scope.declarer.predicate(reader, lst, name, len(args), scope.owner)
         if len(pred.params) != len(args):
+            where = scope.declarer.origin(name) if scope.declarer is not None else ""
             raise reader.error(
-                lst, f"predicate {name!r} takes {pred.arity} arguments but {len(args)} are given"
+                lst,
+                f"predicate {name!r} takes {pred.arity} arguments but {len(args)} are given{where}",
             )
     return Atom(name, tuple(args))
 
@@ -390,6 +508,13 @@ def _check_requirements(reader: _Reader, lst: SList) -> tuple[str, ...]:
     reqs = []
     for node in lst.items[1:]:
         req = reader.symbol(node, "a requirement such as :strips")
+        if req in (":durative-actions", ":duration-inequalities", ":timed-initial-literals"):
+            raise reader.unsupported(
+                node,
+                f"requirement {req} is not supported: temporal planning (durative actions) is "
+                "not; write each durative action as an :action whose duration is its cost "
+                "((increase (total-cost) ...)), and its :condition as :precondition",
+            )
         if req not in SUPPORTED_REQUIREMENTS:
             raise reader.unsupported(
                 node,
@@ -429,8 +554,10 @@ def _unique(
     return out
 
 
-def _parse_functions(reader: _Reader, section: SList, functions: dict[str, FunctionDecl]) -> bool:
-    """``(:functions (total-cost) - number (dist ?a ?b) ...)``; True if total-cost is one."""
+def _parse_functions(reader: _Reader, section: SList, declarer: _Declarer) -> bool:
+    """``(:functions (total-cost) - number (dist ?a ?b) ...)``; True if total-cost is one. A
+    function declared twice alike is accepted (with an :class:`Inference`) unless strict."""
+    functions = declarer.functions
     uses_costs = False
     items = section.items[1:]
     i = 0
@@ -453,20 +580,77 @@ def _parse_functions(reader: _Reader, section: SList, functions: dict[str, Funct
                 raise reader.error(flst, "(total-cost) takes no arguments")
             uses_costs = True
         else:
-            if fname in functions:
-                raise reader.error(flst, f"function {fname!r} is declared twice")
             params = reader.typed_list(flst.items[1:], f"function {fname}", either=True)
             for p in params:
                 if not is_variable(p.name):
                     raise reader.error(flst, f"parameter {p.name!r} of {fname} must start with ?")
-            functions[fname] = FunctionDecl(fname, params)
+            decl = FunctionDecl(fname, params)
+            key = f"(function {fname})"
+            if fname in functions:
+                _repeat(reader, flst, declarer, "function", fname, functions[fname], decl, key)
+            else:
+                functions[fname] = decl
+                declarer.places[key] = f"declared at {reader.place(flst)}"
         i += 1
     return uses_costs
 
 
+def _types_text(params: tuple[TypedName, ...]) -> str:
+    return " ".join(p.type_text() for p in params) or "no arguments"
+
+
+def _repeat(
+    reader: _Reader,
+    node: SList,
+    declarer: _Declarer,
+    kind: str,
+    name: str,
+    first: Predicate | FunctionDecl,
+    again: Predicate | FunctionDecl,
+    key: str,
+) -> None:
+    """A predicate or function declared a second time: accepted with an :class:`Inference`
+    when both declarations agree (Fast Downward's reading), an error when they do not or
+    when strict."""
+    where = declarer.places.get(key, "")
+    if declarer.strict:
+        raise reader.error(
+            node,
+            f"{kind} {name!r} is declared twice ({where}; without --strict a repeat that "
+            "agrees is accepted)",
+        )
+    same = len(first.params) == len(again.params) and all(
+        a.types == b.types for a, b in zip(first.params, again.params, strict=True)
+    )
+    if not same:
+        raise reader.error(
+            node,
+            f"{kind} {name!r} is declared twice and the two disagree: {first.arity} "
+            f"argument(s) ({_types_text(first.params)}) {where}, {again.arity} "
+            f"({_types_text(again.params)}) here",
+        )
+    line, column = reader.source.position(node.token)
+    declarer.inferred.append(
+        Inference(
+            "repeat",
+            name,
+            again.arity,
+            reader.file,
+            line,
+            column,
+            f"{kind} {name!r} is declared twice, alike ({where})",
+        )
+    )
+
+
 @_paused
-def parse_domain(text: str, *, file: str = "<string>") -> Domain:
-    """Parse a PDDL domain; errors carry file, line and column."""
+def parse_domain(text: str, *, file: str = "<string>", strict: bool = False) -> Domain:
+    """Parse a PDDL domain; errors carry file, line and column.
+
+    Lenient by default, as PDDLStream is: a predicate or function used in an action or a
+    derived predicate without a declaration is declared by its first use, a derived predicate
+    by its ``:derived`` head, and a repeated declaration that agrees is accepted; each is an
+    :class:`~planner.pddl.structs.Inference` in ``Domain.inferred``. ``strict`` refuses them."""
     root, source = read_sexpr(text, file=file)
     reader = _Reader(source)
     name = _definition(reader, root, "domain")
@@ -476,6 +660,7 @@ def parse_domain(text: str, *, file: str = "<string>") -> Domain:
     predicates: dict[str, Predicate] = {}
     predicate_params: list[tuple[TypedName, Node]] = []
     functions: dict[str, FunctionDecl] = {}
+    declarer = _Declarer(predicates, functions, strict=strict)
     action_nodes: list[SList] = []
     derived_nodes: list[SList] = []
     uses_costs = False
@@ -503,13 +688,18 @@ def parse_domain(text: str, *, file: str = "<string>") -> Domain:
             for pnode in section.items[1:]:
                 plst = reader.slist(pnode, "a predicate declaration such as (on ?x ?y)")
                 pname = reader.head(plst, "a predicate name")
-                if pname in predicates:
-                    raise reader.error(plst, f"predicate {pname!r} is declared twice")
                 params = reader.typed_items(plst.items[1:], f"predicate {pname}", either=True)
                 predicate_params += params
-                predicates[pname] = Predicate(pname, tuple(t for t, _ in params))
+                pred = Predicate(pname, tuple(t for t, _ in params))
+                if pname in predicates:
+                    _repeat(
+                        reader, plst, declarer, "predicate", pname, predicates[pname], pred, pname
+                    )
+                    continue
+                predicates[pname] = pred
+                declarer.places[pname] = f"declared at {reader.place(plst)}"
         elif key == ":functions":
-            uses_costs = _parse_functions(reader, section, functions)
+            uses_costs = _parse_functions(reader, section, declarer)
         elif key == ":action":
             action_nodes.append(section)
         elif key == ":derived":
@@ -532,13 +722,16 @@ def parse_domain(text: str, *, file: str = "<string>") -> Domain:
         if is_variable(c.name):
             raise reader.error(cnode, f"constant {c.name!r} must not start with '?'")
     const_names = {c.name for c, _ in constants}
+    if not strict:
+        for d in derived_nodes:  # a derived predicate declares itself (bodies may use others)
+            _declare_derived(reader, d, declarer, known_types)
     derived = tuple(
-        _parse_derived(reader, d, predicates, const_names, known_types) for d in derived_nodes
+        _parse_derived(reader, d, declarer, const_names, known_types) for d in derived_nodes
     )
     derived_names = {d.name for d in derived}
     actions: dict[str, Action] = {}
     for anode in action_nodes:
-        action = _parse_action(reader, anode, predicates, const_names, functions, known_types)
+        action = _parse_action(reader, anode, declarer, const_names, known_types)
         if action.name in actions:
             raise reader.error(anode, f"action {action.name!r} is defined twice")
         for atom in _changed(action):
@@ -562,6 +755,8 @@ def parse_domain(text: str, *, file: str = "<string>") -> Domain:
         source=file,
         derived=derived,
         functions=tuple(functions.values()),
+        inferred=tuple(declarer.inferred),
+        places=declarer.places,
     )
 
 
@@ -572,27 +767,55 @@ def _changed(action: Action) -> list[Atom]:
     return atoms
 
 
+def _declare_derived(
+    reader: _Reader, lst: SList, declarer: _Declarer, known_types: set[str]
+) -> None:
+    """A derived predicate missing from ``:predicates`` declared by its head (lenient)."""
+    if len(lst.items) != 3 or not isinstance(lst.items[1], SList) or not lst.items[1].items:
+        return  # _parse_derived says what is wrong
+    head = lst.items[1]
+    name = reader.head(head, "a predicate name")
+    if name in declarer.predicates:
+        return
+    items = reader.typed_items(head.items[1:], f"derived predicate {name}", either=True)
+    reader.check_types(items, known_types)
+    params = tuple(t for t, _ in items)
+    declarer.predicates[name] = Predicate(name, params)
+    declarer.new_predicates.append(declarer.predicates[name])
+    line, column = reader.source.position(head.token)
+    declarer.inferred.append(
+        Inference("derived", name, len(params), reader.file, line, column, f"derived {name}")
+    )
+    declarer.places[name] = f"declared by its (:derived ...) head at {reader.place(head)}"
+
+
 def _parse_derived(
     reader: _Reader,
     lst: SList,
-    predicates: dict[str, Predicate],
+    declarer: _Declarer,
     constants: set[str],
     known_types: set[str],
 ) -> DerivedPredicate:
+    predicates = declarer.predicates
     if len(lst.items) != 3:
         raise reader.error(lst, "expected (:derived (NAME ?x ...) FORMULA)")
     head = reader.slist(lst.items[1], "the derived predicate, such as (clear ?x)")
     name = reader.head(head, "a predicate name")
     pred = predicates.get(name)
     if pred is None:
-        raise reader.error(head, f"derived predicate {name!r} is not declared in :predicates")
+        raise reader.error(
+            head,
+            f"derived predicate {name!r} is not declared in :predicates ({STRICT_HINT})",
+        )
     items = reader.typed_items(head.items[1:], f"derived predicate {name}", either=True)
     for typed, at in items:
         if not is_variable(typed.name):
             raise reader.error(at, f"parameter {typed.name!r} of {name} must start with '?'")
     if len(items) != pred.arity:
         raise reader.error(
-            head, f"predicate {name!r} takes {pred.arity} arguments but {len(items)} are given"
+            head,
+            f"predicate {name!r} takes {pred.arity} arguments but {len(items)} are given"
+            f"{declarer.origin(name)}",
         )
     if len({t.name for t, _ in items}) != len(items):
         raise reader.error(head, f"derived predicate {name} repeats a parameter")
@@ -601,18 +824,25 @@ def _parse_derived(
         t if t.types != (OBJECT_TYPE,) else TypedName(t.name, p.type, p.either)
         for (t, _), p in zip(items, pred.params, strict=True)
     )
-    scope = _Scope(predicates, {p.name: p for p in params}, constants, f"derived predicate {name}")
+    scope = _Scope(
+        predicates,
+        {p.name: p for p in params},
+        constants,
+        f"derived predicate {name}",
+        declarer.functions,
+        declarer,
+    )
     return DerivedPredicate(name, params, _formula(reader, lst.items[2], scope))
 
 
 def _parse_action(
     reader: _Reader,
     lst: SList,
-    predicates: dict[str, Predicate],
+    declarer: _Declarer,
     constants: set[str],
-    functions: dict[str, FunctionDecl],
     known_types: set[str],
 ) -> Action:
+    predicates, functions = declarer.predicates, declarer.functions
     if len(lst.items) < 2:
         raise reader.error(lst, "expected an action name after :action")
     name = reader.symbol(lst.items[1], "an action name")
@@ -639,7 +869,14 @@ def _parse_action(
         raise reader.error(lst, f"{owner} repeats a parameter")
     reader.check_types(params, known_types)
     typed = tuple(p for p, _ in params)
-    scope = _Scope(predicates, {p.name: p for p in typed}, constants, owner, functions)
+    scope = _Scope(
+        predicates,
+        {p.name: p for p in typed},
+        constants,
+        owner,
+        functions,
+        declarer,
+    )
     pre: tuple[Literal, ...] = ()
     conditions: tuple[Formula, ...] = ()
     if pre_node is not None:
@@ -778,13 +1015,17 @@ class _Effects:
 def _function_term(reader: _Reader, lst: SList, scope: _Scope) -> FunctionTerm:
     """``(f a ?x)``: a declared function, its arity, its terms in scope."""
     name = reader.head(lst, "a function name")
+    args = tuple(reader.symbol(a, f"an argument of ({name} ...)") for a in lst.items[1:])
     decl = scope.functions.get(name)
     if decl is None:
-        raise reader.error(lst, f"undeclared function {name!r} in {scope.owner}")
-    args = tuple(reader.symbol(a, f"an argument of ({name} ...)") for a in lst.items[1:])
+        if scope.declarer is None:
+            raise reader.error(lst, f"undeclared function {name!r} in {scope.owner}")
+        decl = scope.declarer.function(reader, lst, name, len(args), scope.owner)
     if len(args) != decl.arity:
+        where = scope.declarer.origin(name, function=True) if scope.declarer else ""
         raise reader.error(
-            lst, f"function {name!r} takes {decl.arity} arguments but {len(args)} are given"
+            lst,
+            f"function {name!r} takes {decl.arity} arguments but {len(args)} are given{where}",
         )
     for arg, at in zip(args, lst.items[1:], strict=True):
         _check_term(reader, arg, at, scope)
@@ -792,8 +1033,14 @@ def _function_term(reader: _Reader, lst: SList, scope: _Scope) -> FunctionTerm:
 
 
 @_paused
-def parse_problem(text: str, domain: Domain, *, file: str = "<string>") -> Problem:
-    """Parse a PDDL problem against ``domain``; objects and predicates are checked."""
+def parse_problem(
+    text: str, domain: Domain, *, file: str = "<string>", strict: bool = False
+) -> Problem:
+    """Parse a PDDL problem against ``domain``; objects and predicates are checked.
+
+    Lenient by default (PDDLStream's reading): a predicate or function of ``:init`` or the
+    goal that the domain does not declare is declared by its first use (``Problem.inferred``);
+    ``strict`` refuses it."""
     root, source = read_sexpr(text, file=file)
     reader = _Reader(source)
     name = _definition(reader, root, "problem")
@@ -850,7 +1097,8 @@ def parse_problem(text: str, domain: Domain, *, file: str = "<string>") -> Probl
     names = {o.name for o, _ in objects} | {c.name for c in domain.constants}
     preds = {p.name: p for p in domain.predicates}
     funcs = {f.name: f for f in domain.functions}
-    scope = _Scope(preds, {}, names, f"problem {name}", funcs)
+    declarer = _Declarer(preds, funcs, strict=strict, places=dict(domain.places))
+    scope = _Scope(preds, {}, names, f"problem {name}", funcs, declarer)
     init: set[Atom] = set()
     values: dict[FunctionTerm, float] = {}
     derived = domain.derived_predicates
@@ -880,6 +1128,7 @@ def parse_problem(text: str, domain: Domain, *, file: str = "<string>") -> Probl
         source=file,
         goal_conditions=conditions,
         function_values=values,
+        inferred=tuple(declarer.inferred),
     )
 
 
@@ -912,20 +1161,59 @@ class _StreamScope:
     constants: set[str]
     known_types: set[str]
     fluents: frozenset[str]
+    declarer: _Declarer
+
+    def scope(self, variables: dict[str, TypedName], owner: str) -> _Scope:
+        return _Scope(
+            self.predicates,
+            variables,
+            self.constants,
+            owner,
+            self.declarer.functions,
+            self.declarer,
+        )
+
+
+OPTIMIZER_HELP = (
+    "this planner queries each stream on its own and learns what each costs, so it has no "
+    "joint solver: write the optimizer's (:variables ...) as a (:stream ...) whose :outputs "
+    "are those variables (a sampler proposing values) and each (:constraint ...) as a test "
+    "stream or a (:predicate ...), and bind them in the stream map (docs/pddl.md, Optimizers)"
+)
+WILD_HELP = (
+    "a wild stream certifies facts it does not declare; declare what it may certify in the "
+    ":certified of a (:stream ...)"
+)
 
 
 @_paused
-def parse_streams(text: str, domain: Domain, *, file: str = "<string>") -> StreamSet:
-    """Parse a PDDLStream ``stream.pddl`` whose facts use ``domain``'s predicates."""
+def parse_streams(
+    text: str, domain: Domain, *, file: str = "<string>", strict: bool = False
+) -> StreamSet:
+    """Parse a PDDLStream ``stream.pddl`` whose facts use ``domain``'s predicates.
+
+    Lenient by default (PDDLStream's reading): a predicate in a stream's ``:domain`` or
+    ``:certified``, or a ``(:predicate ...)`` or ``(:function ...)`` the domain does not
+    declare, is declared by its first use (``StreamSet.declared``, ``declared_functions``,
+    ``inferred``; :func:`load_pddlstream` gives the domain those declarations). ``strict``
+    refuses them."""
     root, source = read_sexpr(text, file=file)
     reader = _Reader(source)
     name = _definition(reader, root, "stream")
+    predicates = {p.name: p for p in domain.predicates}
+    declarer = _Declarer(
+        predicates,
+        {f.name: f for f in domain.functions},
+        strict=strict,
+        places=dict(domain.places),
+    )
     ctx = _StreamScope(
         domain,
-        {p.name: p for p in domain.predicates},
+        predicates,
         {c.name for c in domain.constants},
         {OBJECT_TYPE} | {t.name for t in domain.types} | {t.type for t in domain.types},
         domain.fluent_predicates,
+        declarer,
     )
     streams: list[Stream] = []
     functions: list[StreamFunction] = []
@@ -944,8 +1232,12 @@ def parse_streams(text: str, domain: Domain, *, file: str = "<string>") -> Strea
             declared = _parse_lazy_predicate(reader, section, ctx)
         elif key == ":function":
             declared = _parse_function(reader, section, ctx)
-        elif key in (":optimizer", ":wild-stream", ":wild"):
-            raise reader.unsupported(section, f"{key} declarations are not supported")
+        elif key == ":optimizer":
+            raise reader.unsupported(
+                section, f"(:optimizer ...) blocks are not supported: {OPTIMIZER_HELP}"
+            )
+        elif key in (":wild-stream", ":wild"):
+            raise reader.unsupported(section, f"({key} ...) is not supported: {WILD_HELP}")
         else:
             raise reader.error(
                 section,
@@ -964,7 +1256,15 @@ def parse_streams(text: str, domain: Domain, *, file: str = "<string>") -> Strea
         else:
             streams.append(declared)
     _check_lazy(reader, streams, where)
-    return StreamSet(name, tuple(streams), source=file, functions=tuple(functions))
+    return StreamSet(
+        name,
+        tuple(streams),
+        source=file,
+        functions=tuple(functions),
+        declared=tuple(declarer.new_predicates),
+        declared_functions=tuple(declarer.new_functions),
+        inferred=tuple(declarer.inferred),
+    )
 
 
 def _check_lazy(reader: _Reader, streams: list[Stream], where: dict[str, SList]) -> None:
@@ -1057,9 +1357,7 @@ def _parse_stream(reader: _Reader, lst: SList, ctx: _StreamScope) -> Stream:
         if typed.name in declared:
             raise reader.error(at, f"{owner} repeats {typed.name} among its inputs and outputs")
         declared[typed.name] = typed
-    dscope = _Scope(
-        ctx.predicates, {i.name: i for i, _ in inputs}, ctx.constants, f"{owner} :domain"
-    )
+    dscope = ctx.scope({i.name: i for i, _ in inputs}, f"{owner} :domain")
     domain_atoms = _fact_list(reader, domain_node, dscope, owner, ":domain")
     mentioned = {v for a in domain_atoms for v in a.variables}
     for typed, at in inputs:
@@ -1072,7 +1370,7 @@ def _parse_stream(reader: _Reader, lst: SList, ctx: _StreamScope) -> Stream:
             )
     if certified_node is None:
         raise reader.error(lst, f"{owner}: expected a :certified formula")
-    cscope = _Scope(ctx.predicates, declared, ctx.constants, f"{owner} :certified")
+    cscope = ctx.scope(declared, f"{owner} :certified")
     _undeclared_output(reader, certified_node, declared, owner, has_outputs)
     certified = _fact_list(reader, certified_node, cscope, owner, ":certified")
     if not certified:
@@ -1159,7 +1457,7 @@ def _parse_rule(reader: _Reader, lst: SList, ctx: _StreamScope, number: int) -> 
                 f"unknown keyword {key.text} in {owner} (expected :inputs, :domain, :certified)",
             )
     declared = {i.name: i for i, _ in inputs}
-    dscope = _Scope(ctx.predicates, declared, ctx.constants, f"{owner} :domain")
+    dscope = ctx.scope(declared, f"{owner} :domain")
     domain_atoms = _fact_list(reader, domain_node, dscope, owner, ":domain")
     mentioned = {v for a in domain_atoms for v in a.variables}
     for typed, at in inputs:
@@ -1167,7 +1465,7 @@ def _parse_rule(reader: _Reader, lst: SList, ctx: _StreamScope, number: int) -> 
             raise reader.error(at, f"{owner}: input {typed.name} must appear in a :domain fact")
     if certified_node is None:
         raise reader.error(lst, f"{owner}: expected a :certified formula")
-    cscope = _Scope(ctx.predicates, declared, ctx.constants, f"{owner} :certified")
+    cscope = ctx.scope(declared, f"{owner} :certified")
     certified = _fact_list(reader, certified_node, cscope, owner, ":certified")
     if not certified:
         raise reader.error(certified_node, f"{owner} certifies nothing")
@@ -1206,17 +1504,25 @@ def _head_and_domain(
     head = reader.slist(lst.items[1], f"the {kind}, such as {example}")
     name = reader.head(head, f"a {kind} name")
     owner = f"{kind} {name}"
+    inputs = _head_vars(reader, head, owner)
     if name not in arities:
         section = ":predicates" if kind == "predicate" else ":functions"
-        raise reader.error(head, f"{owner} is not declared in the domain's {section}")
-    inputs = _head_vars(reader, head, owner)
+        if ctx.declarer.strict:
+            raise reader.error(
+                head, f"{owner} is not declared in the domain's {section} ({STRICT_HINT})"
+            )
+        if kind == "predicate":
+            ctx.declarer.predicate(reader, head, name, len(inputs), f"(:predicate {name} ...)")
+        else:
+            ctx.declarer.function(reader, head, name, len(inputs), f"(:function {name} ...)")
+        arities[name] = len(inputs)
     if len(inputs) != arities[name]:
+        where = ctx.declarer.origin(name, function=kind == "function")
         raise reader.error(
-            head, f"{kind} {name!r} takes {arities[name]} arguments but {len(inputs)} are given"
+            head,
+            f"{kind} {name!r} takes {arities[name]} arguments but {len(inputs)} are given{where}",
         )
-    dscope = _Scope(
-        ctx.predicates, {v: TypedName(v) for v in inputs}, ctx.constants, f"{owner} domain"
-    )
+    dscope = ctx.scope({v: TypedName(v) for v in inputs}, f"{owner} domain")
     domain_atoms = _fact_list(
         reader, lst.items[2] if len(lst.items) == 3 else None, dscope, owner, "its domain"
     )
@@ -1246,18 +1552,33 @@ def _parse_lazy_predicate(reader: _Reader, lst: SList, ctx: _StreamScope) -> Str
 
 
 def _parse_function(reader: _Reader, lst: SList, ctx: _StreamScope) -> StreamFunction:
-    arities = {f.name: f.arity for f in ctx.domain.functions}
+    arities = {f.name: f.arity for f in ctx.declarer.functions.values()}
     name, inputs, domain_atoms, _ = _head_and_domain(reader, lst, ctx, "function", arities)
     return StreamFunction(name, inputs, domain_atoms, source=reader.file, line=reader.line(lst))
 
 
-def load_domain(path: str | Path) -> Domain:
-    return parse_domain(read_file(path), file=str(path))
+def load_domain(path: str | Path, *, strict: bool = False) -> Domain:
+    return parse_domain(read_file(path), file=str(path), strict=strict)
 
 
-def load_problem(path: str | Path, domain: Domain) -> Problem:
-    return parse_problem(read_file(path), domain, file=str(path))
+def load_problem(path: str | Path, domain: Domain, *, strict: bool = False) -> Problem:
+    return parse_problem(read_file(path), domain, file=str(path), strict=strict)
 
 
-def load_streams(path: str | Path, domain: Domain) -> StreamSet:
-    return parse_streams(read_file(path), domain, file=str(path))
+def load_streams(path: str | Path, domain: Domain, *, strict: bool = False) -> StreamSet:
+    return parse_streams(read_file(path), domain, file=str(path), strict=strict)
+
+
+def with_stream_declarations(domain: Domain, streams: StreamSet) -> Domain:
+    """``domain`` with the predicates and functions ``streams`` declared by their use."""
+    return domain.declaring(streams.declared, streams.declared_functions)
+
+
+def load_pddlstream(
+    domain_path: str | Path, stream_path: str | Path, *, strict: bool = False
+) -> tuple[Domain, StreamSet]:
+    """A domain file and its stream file, the domain holding what the stream file declared
+    by use (each file's ``inferred`` lists what was inferred from it)."""
+    domain = load_domain(domain_path, strict=strict)
+    streams = load_streams(stream_path, domain, strict=strict)
+    return with_stream_declarations(domain, streams), streams

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal as TypingLiteral
 
 OBJECT_TYPE = "object"  # the root of every type hierarchy
@@ -274,6 +274,58 @@ def quantified_types(formula: Formula) -> Iterator[TypedName]:
         yield from quantified_types(formula.body)
 
 
+InferenceKind = TypingLiteral["predicate", "function", "derived", "repeat"]
+
+
+@dataclass(frozen=True)
+class Inference:
+    """A declaration the files left out, made from its first use (PDDLStream's leniency), or a
+    repeated declaration that agrees with the first, accepted. ``tamp check`` lists them; a
+    strict parse refuses each as an error at the same place.
+
+    ``kind``: ``predicate`` or ``function`` declared by a use (``use`` says where: ``action
+    move``, ``stream sample-grasp :domain``, ``init``, ...); ``derived`` a derived predicate
+    declared by its ``:derived`` head; ``repeat`` a predicate or function declared twice alike.
+    """
+
+    kind: InferenceKind
+    name: str
+    arity: int
+    file: str
+    line: int
+    column: int
+    use: str
+    near: str = ""  # a declared name one letter away (a likely typo), or ""
+
+    @property
+    def place(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+    @property
+    def message(self) -> str:
+        args = f"{self.arity} argument{'' if self.arity == 1 else 's'}"
+        typo = f" (did you mean {self.near!r}?)" if self.near else ""
+        if self.kind == "predicate":
+            return (
+                f"predicate {self.name!r} ({args}) is not in :predicates; declared by its use "
+                f"in {self.use}{typo}"
+            )
+        if self.kind == "function":
+            return (
+                f"function {self.name!r} ({args}) is not in :functions; declared by its use "
+                f"in {self.use}{typo}"
+            )
+        if self.kind == "derived":
+            return (
+                f"derived predicate {self.name!r} ({args}) is not in :predicates; declared by "
+                "its (:derived ...) head"
+            )
+        return f"{self.use}; the repeat is ignored"
+
+    def __str__(self) -> str:
+        return f"{self.place}: {self.message}"
+
+
 @dataclass(frozen=True)
 class Predicate:
     name: str
@@ -467,6 +519,10 @@ class Domain:
     source: str = "<string>"
     derived: tuple[DerivedPredicate, ...] = ()
     functions: tuple[FunctionDecl, ...] = ()  # numeric functions besides total-cost
+    # What the files left undeclared and the parser declared from its use (lenient parses)
+    inferred: tuple[Inference, ...] = field(default=(), compare=False)
+    # Where each predicate (and "(function NAME)") was declared, for error messages
+    places: Mapping[str, str] = field(default_factory=dict, compare=False, hash=False, repr=False)
     _index: dict[str, dict[str, object]] = field(
         default_factory=dict, init=False, repr=False, compare=False, hash=False
     )
@@ -502,6 +558,28 @@ class Domain:
     @property
     def typed(self) -> bool:
         return bool(self.types)
+
+    def declaring(
+        self,
+        predicates: Iterable[Predicate] = (),
+        functions: Iterable[FunctionDecl] = (),
+        inferred: Iterable[Inference] = (),
+    ) -> Domain:
+        """This domain with more predicates and functions (those a stream file or a problem
+        declared by their use); names it has already are left as they are."""
+        have = {p.name for p in self.predicates}
+        new_predicates = [p for p in predicates if p.name not in have]
+        have_f = {f.name for f in self.functions}
+        new_functions = [f for f in functions if f.name not in have_f]
+        more = tuple(inferred)
+        if not new_predicates and not new_functions and not more:
+            return self
+        return replace(
+            self,
+            predicates=(*self.predicates, *new_predicates),
+            functions=(*self.functions, *new_functions),
+            inferred=(*self.inferred, *more),
+        )
 
     @property
     def derived_predicates(self) -> frozenset[str]:
@@ -654,6 +732,11 @@ class StreamSet:
     streams: tuple[Stream, ...]
     source: str = "<string>"
     functions: tuple[StreamFunction, ...] = ()
+    # Predicates and functions this file declared by their use (lenient parses): the domain
+    # gets them through Domain.declaring (planner.pddl.load_pddlstream does it)
+    declared: tuple[Predicate, ...] = field(default=(), compare=False)
+    declared_functions: tuple[FunctionDecl, ...] = field(default=(), compare=False)
+    inferred: tuple[Inference, ...] = field(default=(), compare=False)
     _index: dict[str, Stream | StreamFunction] = field(
         default_factory=dict, init=False, repr=False, compare=False, hash=False
     )
@@ -720,6 +803,8 @@ class Problem:
     function_values: Mapping[FunctionTerm, float] = field(
         default_factory=dict, compare=False, hash=False
     )
+    # Predicates and functions the problem file declared by their use (lenient parses)
+    inferred: tuple[Inference, ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
         _check_unique((o.name for o in self.objects), f"problem {self.name}: repeated object")
@@ -745,3 +830,23 @@ class Problem:
     @property
     def goal_formula(self) -> Formula:
         return And((*self.goal, *self.goal_conditions))
+
+
+def problem_predicates(domain: Domain, problem: Problem) -> tuple[Predicate, ...]:
+    """Predicates of ``problem``'s initial facts and goal that ``domain`` does not declare (a
+    PDDLStream problem's static facts are declared by their use), untyped, each with the
+    arity of its first use in sorted order."""
+    have = {p.name for p in domain.predicates}
+    atoms = sorted(problem.init) + [lit.atom for lit in problem.goal]
+    for formula in problem.goal_conditions:
+        atoms += [lit.atom for lit, _ in literals(formula)]
+    found: dict[str, Predicate] = {}
+    for atom in atoms:
+        if atom.predicate not in have and atom.predicate != EQUALITY:
+            found.setdefault(
+                atom.predicate,
+                Predicate(
+                    atom.predicate, tuple(TypedName(f"?x{i}") for i in range(len(atom.args)))
+                ),
+            )
+    return tuple(found.values())
