@@ -25,7 +25,10 @@ if TYPE_CHECKING:
     from planner.view import DomainView
 
 ProblemBuilder = Callable[[Scene, Domain, int], Problem]  # scene, parsed domain, seed
-BindingFactory = Callable[[Problem, random.Random], Mapping[str, StreamAdapter]]
+# stream name -> adapter (or, for a (:function ...) or (:predicate ...), a plain function)
+BindingFactory = Callable[
+    [Problem, random.Random], Mapping[str, StreamAdapter | Callable[..., Any]]
+]
 StaticContext = Callable[[Problem], Mapping[str, Any]]  # JSON facts of the scene, per problem
 
 

@@ -97,11 +97,14 @@ def expand(paths: Iterable[str | Path]) -> list[Path]:
 
 
 def _domain_summary(domain: Domain) -> str:
-    parts = [f"{len(domain.actions)} actions", f"{len(domain.predicates)} predicates"]
+    def count(n: int, what: str) -> str:
+        return f"{n} {what}{'' if n == 1 else 's'}"
+
+    parts = [count(len(domain.actions), "action"), count(len(domain.predicates), "predicate")]
     if domain.derived:
         parts.append(f"{len(domain.derived)} derived")
     if domain.functions:
-        parts.append(f"{len(domain.functions)} functions")
+        parts.append(count(len(domain.functions), "function"))
     return f"domain {domain.name}: {', '.join(parts)}"
 
 

@@ -4,12 +4,19 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Hashable, Mapping
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 from planner.pddl.structs import Stream, StreamFunction, StreamSet
-from planner.streams.adapters import Failure, Outputs, StreamAdapter, StreamContext, from_test
+from planner.streams.adapters import (
+    Failure,
+    Outputs,
+    StreamAdapter,
+    StreamContext,
+    from_function,
+    from_test,
+)
 
 log = logging.getLogger(__name__)
 
@@ -72,12 +79,57 @@ def _rule_test(*inputs: Any) -> bool:
     return True
 
 
-def bind_streams(streams: StreamSet, bindings: Mapping[str, StreamAdapter]) -> StreamRuntime:
+def _as_adapters(
+    streams: StreamSet, bindings: Mapping[str, StreamAdapter | Callable[..., Any]]
+) -> dict[str, StreamAdapter]:
+    """PDDLStream's stream-map conventions: names match case-insensitively, and a
+    ``(:function ...)`` or ``(:predicate ...)`` may be a plain Python function."""
+    functions = {f.name for f in streams.functions}
+    lazy = {s.name for s in streams.streams if s.kind == "predicate"}
+    out: dict[str, StreamAdapter] = {}
+    for raw, binding in bindings.items():
+        name = raw.lower() if isinstance(raw, str) else raw
+        if name in out:
+            raise StreamBindingError(
+                f"two bindings for stream {name!r} (names ignore case)",
+                stream=name,
+                file=streams.source,
+            )
+        if not isinstance(binding, StreamAdapter):
+            if not callable(binding):
+                raise StreamBindingError(
+                    f"the binding of {raw!r} is a {type(binding).__name__}, not a stream "
+                    "adapter (from_gen_fn, from_fn, from_test, ...) or a function",
+                    stream=name,
+                    file=streams.source,
+                )
+            if name in functions:
+                binding = from_function(binding)
+            elif name in lazy:
+                binding = from_test(binding)
+            else:
+                raise StreamBindingError(
+                    f"{streams.source}: stream {name!r} is bound to a plain function; wrap it "
+                    "in an adapter that says how it answers (from_gen_fn, from_fn, from_test; "
+                    "planner.streams.pddlstream for PDDLStream's)",
+                    stream=name,
+                    file=streams.source,
+                )
+        out[name] = binding
+    return out
+
+
+def bind_streams(
+    streams: StreamSet, bindings: Mapping[str, StreamAdapter | Callable[..., Any]]
+) -> StreamRuntime:
     """Check that declarations and bindings match one to one, then build the runtime.
 
     Streams, lazily evaluated predicates and functions each need a binding (a predicate a
-    boolean test, a function :func:`~planner.streams.adapters.from_function`); rules need none.
+    boolean test, a function :func:`~planner.streams.adapters.from_function`, or for either a
+    plain function, as PDDLStream's stream maps have them); rules need none. Names match
+    case-insensitively.
     """
+    bindings = _as_adapters(streams, bindings)
     needed = streams.binding_names
     for name in needed:
         if name not in bindings:
