@@ -230,6 +230,11 @@ class _TreeSearchPlanner(Planner):
     def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
         return BaselinePolicy(BaselineConfig())
 
+    @property
+    def exhaustion(self) -> bool:
+        """Whether an exhausted stream's node is left alone (LearnedConfig.exhaustion)."""
+        return True
+
     def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome:
         search = TreeSearch(
             task.plans,
@@ -245,6 +250,7 @@ class _TreeSearchPlanner(Planner):
             fluents=task.fluents,
             static_context=task.static_context,
             reuse=True,
+            exhaustion=self.exhaustion,
         )
         outcome = search.run(deadline=budget.deadline, start=budget.start)
         queries = [r for _, r in outcome.queries if not r.reused]
@@ -293,6 +299,10 @@ class LearnedPlanner(_TreeSearchPlanner):
         if self.config.order != "auto":
             return self.config.order
         return "model" if self.parts.model_order else "plan"
+
+    @property
+    def exhaustion(self) -> bool:
+        return self.parts.exhaustion
 
     def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
         assert self.predictor is not None  # prepare() loaded it

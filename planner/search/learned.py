@@ -159,10 +159,20 @@ class LearnedConfig:
     seeds): total 14.2% more without it (2.4% to 29.7% more); not measurable on tabletop-4
     (a73daea: planning 5% more, 7% less to 19% more)."""
 
+    exhaustion: bool = True
+    """A node whose stream said it will find nothing more for its inputs (an ended generator, a
+    PDDLStream ``from_fn`` or ``from_list_fn`` that gave what it had) is not queried again, and
+    a plan whose nodes are all exhausted is not chosen again (planner/search/mcts.py). Not a
+    part of the policy but the stream's own word: on for every tree search, the baseline's and
+    the paper's too; off queries such a node again and again (each query a failure).
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): see *Exhausted streams*."""
+
     @classmethod
     def paper(cls) -> LearnedConfig:
-        """The paper's planner: every addition off."""
-        return cls(**{f.name: False for f in fields(cls) if f.type in (bool, "bool")})
+        """The paper's planner: every addition off (exhaustion, the streams' contract, stays)."""
+        off = {f.name: False for f in fields(cls) if f.type in (bool, "bool")}
+        return cls(**{**off, "exhaustion": True})
 
     @classmethod
     def parts(cls) -> tuple[str, ...]:
@@ -466,7 +476,7 @@ class LearnedPolicy:
     def pick_plan(self, tree: Tree) -> Node:
         self._refresh(tree)
         root = tree[ROOT]
-        plans = [tree[c] for c in root.children]
+        plans = tree.live_children(ROOT)  # not the dead (exhausted) ones
         if self._scale <= 0:
             self._scale = max(min(self.q(tree, p) for p in plans), 1e-3)
         return max(

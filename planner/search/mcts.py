@@ -85,7 +85,7 @@ class BaselinePolicy:
     def pick_plan(self, tree: Tree) -> Node:
         root = tree[ROOT]
         return max(
-            (tree[c] for c in root.children),
+            tree.live_children(ROOT),
             key=lambda n: ucb(n.value, n.visits, root.visits, self.config.c_plan),
         )
 
@@ -183,6 +183,7 @@ class TreeSearch:
         fluents: frozenset[str] = frozenset(),
         static_context: Mapping[str, Any] | None = None,
         reuse: bool = False,
+        exhaustion: bool = True,
     ) -> None:
         if not skeletons:
             raise ValueError("the search needs at least one stream plan")
@@ -204,6 +205,10 @@ class TreeSearch:
         # context) for a node's first attempt, where nothing else reads those outputs: a
         # motion re-made after an unrelated choice changed costs nothing (see _reusable).
         self.reuse = reuse
+        # A node whose stream said it is exhausted (Failure.exhausted: a generator that ended,
+        # a PDDLStream function that gave its one output) is not queried again; a node left
+        # with nothing live below it is dead, and so is a plan whose nodes all are.
+        self.exhaustion = exhaustion
         self._reusable = [self._leaves(i) for i in range(len(self.skeletons))] if reuse else []
         # identity -> (node, outputs, wall seconds) of its first success
         self._results: dict[str, tuple[int, tuple[Any, ...], float]] = {}
@@ -300,6 +305,8 @@ class TreeSearch:
             execution_s=result.execution_s if result.success else 0.0,
         )
         self.queries.append((child.id, result))
+        if result.exhausted and self.exhaustion:
+            node.exhausted = True
         if identity is not None and result.outputs is not None and reused_from is None:
             self._results.setdefault(identity, (child.id, tuple(result.outputs), result.wall_s))
         if result.success:
@@ -327,6 +334,16 @@ class TreeSearch:
 
     def _context_json(self, context: StreamContext) -> dict[str, Any]:
         return context_json(context, self.fluents, self.static_context, self.encode)
+
+    def _bury(self, node: Node) -> None:
+        """``node`` is exhausted and nothing live is below it: it is dead, and so is each
+        ancestor left the same way (a plan node's parent, the root, stays)."""
+        current: Node | None = node
+        while current is not None and current.id != ROOT:
+            if not current.exhausted or self.tree.live_children(current.id):
+                return
+            current.dead = True
+            current = None if current.parent is None else self.tree[current.parent]
 
     def _complete(self, node: Node) -> bool:
         return node.success and node.depth == len(self.skeletons[node.plan_index].stream_plan)
@@ -388,8 +405,14 @@ class TreeSearch:
                 break
             iterations += 1
             tree = self.tree
-            if self.policy.add_plan(tree, self._plans_open, len(self.skeletons)):
+            closed = self._plans_open < len(self.skeletons)
+            if self.policy.add_plan(tree, self._plans_open, len(self.skeletons)) or (
+                closed and not tree.live_children(ROOT)
+            ):
                 node = self.open_plan(self._plans_open)
+            elif not tree.live_children(ROOT):
+                status = "failed"  # every stream plan is exhausted
+                break
             else:
                 node = self.policy.pick_plan(tree)
             made = len(tree.nodes)
@@ -397,7 +420,10 @@ class TreeSearch:
             while leaf is None:
                 if self._complete(node):
                     leaf = node
-                elif self.policy.expand(tree, node):
+                elif node.exhausted and not tree.live_children(node.id):
+                    self._bury(node)  # nothing to do here: the next iteration goes elsewhere
+                    break
+                elif not node.exhausted and self.policy.expand(tree, node):
                     child = self.query(node)
                     while child.success and not self._complete(child):
                         if time.perf_counter() >= deadline:
@@ -406,6 +432,8 @@ class TreeSearch:
                     leaf = child
                 else:
                     node = self.policy.pick_child(tree, node)
+            if leaf is None:
+                continue  # a node was found dead; the next iteration chooses again
             self._backup(leaf)
             self.policy.observe(tree, tree.nodes[made:])
             self._say(start)

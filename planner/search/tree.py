@@ -26,6 +26,10 @@ class Node:
     value: float = 0.0
     query_wall_s: float = 0.0  # seconds of the query that made this node
     execution_s: float = 0.0  # seconds the robot will take to execute what that query bound
+    # Its stream said it will find nothing more here (Failure.exhausted): no more queries.
+    exhausted: bool = False
+    # Exhausted and nothing live below it: the search never comes here again.
+    dead: bool = False
 
 
 @dataclass
@@ -90,4 +94,6 @@ class Tree:
         return values
 
     def live_children(self, node_id: int) -> list[Node]:
-        return [self.nodes[c] for c in self.nodes[node_id].children if self.nodes[c].success]
+        """Children a search may still descend into: bound (not failed) and not dead."""
+        nodes = self.nodes
+        return [nodes[c] for c in nodes[node_id].children if nodes[c].success and not nodes[c].dead]

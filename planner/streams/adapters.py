@@ -32,9 +32,13 @@ FluentFact = tuple[Any, ...]  # (predicate, value of each argument)
 
 @dataclass(frozen=True)
 class Failure:
-    """A sampler's "nothing found", with the reason (falsy, like the ``None`` it replaces)."""
+    """A sampler's "nothing found", with the reason (falsy, like the ``None`` it replaces).
+    ``exhausted``: the stream will find nothing more for these inputs, however often it is asked
+    again (an ended generator, a function that gave its one output): the tree search does not
+    query that node again."""
 
     reason: str
+    exhausted: bool = False
 
     def __bool__(self) -> bool:
         return False
@@ -61,6 +65,10 @@ class StreamContext:
         return [(a.predicate, *(self.values.get(x, x) for x in a.args)) for a in facts]
 
 
+TEST_ANSWERED = "the test answered for these inputs, and its answer does not change"
+TEST_FALSE = "the test says false (and will again for these inputs)"
+
+
 @dataclass
 class StreamAdapter:
     """A callable behind a stream name; ``next_outputs`` answers one query.
@@ -73,6 +81,9 @@ class StreamAdapter:
     fn: Callable[..., Any]
     uses_context: bool = False
     lower_bound: float = 0.0  # functions only: the value planning assumes before binding
+    # Tests only: the answer is the same however often it is asked (PDDLStream's tests), so a
+    # second query of the same input binding, and a false answer, are exhausted failures.
+    once: bool = False
     _generators: dict[Hashable, Iterator[Any]] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
@@ -113,10 +124,16 @@ class StreamAdapter:
         if self.kind == "function":
             raise TypeError("a function is evaluated, not queried")
         if self.kind == "test":
+            if self.once:
+                if key in self._generators:
+                    return Failure(TEST_ANSWERED, exhausted=True)
+                self._generators[key] = iter(())
             verdict = self._call(inputs, context, fluents)
             if isinstance(verdict, Failure):
                 return verdict
-            return () if bool(verdict) else None
+            if bool(verdict):
+                return ()
+            return Failure(TEST_FALSE, exhausted=True) if self.once else None
         if self.kind == "fn":
             out = self._call(inputs, context, fluents)
             return out if out is None or isinstance(out, Failure) else tuple(out)
@@ -127,7 +144,7 @@ class StreamAdapter:
         try:
             out = next(gen)
         except StopIteration:
-            return Failure("the generator is exhausted")
+            return Failure("the generator is exhausted", exhausted=True)
         return out if out is None or isinstance(out, Failure) else tuple(out)
 
     @property

@@ -60,6 +60,8 @@ __all__ = [
 
 ONCE = "from_fn gives one output for these inputs, and it was given"
 ALL_GIVEN = "from_list_fn's list for these inputs is used up"
+NONE_FOUND = "from_fn found no output for these inputs (and will not)"
+EMPTY_LIST = "from_list_fn's list for these inputs is empty"
 
 
 def from_gen_fn(gen_fn: Callable[..., Iterable[Sequence[Any] | None]]) -> StreamAdapter:
@@ -95,9 +97,10 @@ def from_fn(fn: Callable[..., Sequence[Any] | None]) -> StreamAdapter:
     as PDDLStream's functions; a second query of the same binding finds nothing new."""
 
     def once(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Failure | None]:
-        yield fn(*inputs, **kwargs)
+        out = fn(*inputs, **kwargs)
+        yield Failure(NONE_FOUND, exhausted=True) if out is None else out
         while True:
-            yield Failure(ONCE)
+            yield Failure(ONCE, exhausted=True)
 
     once.__qualname__ = getattr(fn, "__qualname__", "fn")
     return StreamAdapter("gen", once)
@@ -110,10 +113,10 @@ def from_list_fn(list_fn: Callable[..., Sequence[Sequence[Any]] | None]) -> Stre
     def each(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Failure | None]:
         outputs = list_fn(*inputs, **kwargs) or []
         if not outputs:
-            yield None
+            yield Failure(EMPTY_LIST, exhausted=True)
         yield from outputs
         while True:
-            yield Failure(ALL_GIVEN)
+            yield Failure(ALL_GIVEN, exhausted=True)
 
     each.__qualname__ = getattr(list_fn, "__qualname__", "list_fn")
     return StreamAdapter("gen", each)
@@ -121,8 +124,9 @@ def from_list_fn(list_fn: Callable[..., Sequence[Sequence[Any]] | None]) -> Stre
 
 def from_test(test: Callable[..., Any]) -> StreamAdapter:
     """``test(*inputs)`` returns whether the stream's certified facts hold (a stream without
-    outputs, or a ``(:predicate ...)``)."""
-    return StreamAdapter("test", test)
+    outputs, or a ``(:predicate ...)``). As in PDDLStream, the answer for an input binding does
+    not change: it is asked once (a false answer, or a second query, is exhausted)."""
+    return StreamAdapter("test", test, once=True)
 
 
 def from_constant(constant: Sequence[Any]) -> StreamAdapter:

@@ -53,6 +53,7 @@ class QueryResult:
     error: str | None = None  # set when the sampler raised or returned a malformed result
     reused: bool = False  # the outputs of an identical earlier query; no sampler ran
     reason: str | None = None  # why the sampler found nothing, when it said (a Failure)
+    exhausted: bool = False  # the stream will find nothing more for these inputs (a Failure's)
 
     @property
     def execution_s(self) -> float:
@@ -267,6 +268,7 @@ class StreamRuntime:
         t_cpu = time.thread_time()
         error: str | None = None
         reason: str | None = None
+        exhausted = False
         outputs: Outputs | None
         try:
             if decl.kind == "predicate":
@@ -280,6 +282,7 @@ class StreamRuntime:
                 )
                 if isinstance(answer, Failure):
                     outputs, reason = None, str(answer.reason)  # stored as text, whatever it was
+                    exhausted = answer.exhausted
                 else:
                     outputs = answer
         except Exception as exc:  # a sampler's failure is data, not a crash
@@ -295,4 +298,4 @@ class StreamRuntime:
             )
             log.warning(error)
             outputs = None
-        return QueryResult(name, outputs, wall, cpu, error, reason=reason)
+        return QueryResult(name, outputs, wall, cpu, error, reason=reason, exhausted=exhausted)

@@ -4,6 +4,7 @@ unchanged (tests/streams/pddlstream_tiny) planned by the baseline and the learne
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -14,8 +15,11 @@ from planner.domains import load_domain_folder
 from planner.pddl import Atom, Literal, parse_domain, parse_streams
 from planner.pddl.parser import with_stream_declarations
 from planner.streams import Failure, StreamBindingError, bind_streams
+from planner.streams.adapters import TEST_ANSWERED, TEST_FALSE
 from planner.streams.pddlstream import (
     ALL_GIVEN,
+    EMPTY_LIST,
+    NONE_FOUND,
     ONCE,
     PDDLStreamProblemError,
     empty_gen,
@@ -46,10 +50,17 @@ def test_from_fn_gives_one_output_per_input_binding() -> None:
         return (p + 1,)
 
     adapter = from_fn(ik)
-    assert answers(adapter, 3, 2.0) == [(3.0,), Failure(ONCE), Failure(ONCE)]
+    assert answers(adapter, 3, 2.0) == [
+        (3.0,),
+        Failure(ONCE, exhausted=True),
+        Failure(ONCE, exhausted=True),
+    ]
     assert answers(adapter, 1, 5.0, key="other") == [(6.0,)]
     assert calls == [2.0, 5.0]
-    assert answers(from_fn(lambda p: None), 2, 1.0) == [None, Failure(ONCE)]
+    assert answers(from_fn(lambda p: None), 2, 1.0) == [
+        Failure(NONE_FOUND, exhausted=True),
+        Failure(ONCE, exhausted=True),
+    ]
 
 
 def test_generators_lists_samplers_and_constants() -> None:
@@ -62,7 +73,7 @@ def test_generators_lists_samplers_and_constants() -> None:
         (1,),
         None,
         (2,),
-        Failure("the generator is exhausted"),
+        Failure("the generator is exhausted", exhausted=True),
     ]
 
     def batches(x: int) -> Any:
@@ -71,14 +82,27 @@ def test_generators_lists_samplers_and_constants() -> None:
         yield [(x + 2,)]
 
     assert answers(from_list_gen_fn(batches), 5, 0)[:4] == [(0,), (1,), None, (2,)]
-    assert answers(from_list_fn(lambda x: [(x,), (-x,)]), 3, 4) == [(4,), (-4,), Failure(ALL_GIVEN)]
-    assert answers(from_list_fn(lambda x: []), 2, 4) == [None, Failure(ALL_GIVEN)]
+    assert answers(from_list_fn(lambda x: [(x,), (-x,)]), 3, 4) == [
+        (4,),
+        (-4,),
+        Failure(ALL_GIVEN, exhausted=True),
+    ]
+    assert answers(from_list_fn(lambda x: []), 2, 4) == [
+        Failure(EMPTY_LIST, exhausted=True),
+        Failure(ALL_GIVEN, exhausted=True),
+    ]
     draws = iter(range(10))
     assert answers(from_sampler(lambda x: (next(draws),)), 3, 0) == [(0,), (1,), (2,)]
-    assert answers(from_constant((7, 8)), 2, 0) == [(7, 8), Failure(ONCE)]
-    assert answers(empty_gen(), 1, 0)[0] == Failure("the generator is exhausted")
+    assert answers(from_constant((7, 8)), 2, 0) == [(7, 8), Failure(ONCE, exhausted=True)]
+    assert answers(empty_gen(), 1, 0)[0] == Failure("the generator is exhausted", exhausted=True)
     assert from_test(negate_test(lambda x: x > 2)).next_outputs((1,), "k") == ()
-    assert from_test(lambda x: x > 2).next_outputs((1,), "k") is None
+    said_no = from_test(lambda x: x > 2)
+    assert said_no.next_outputs((1,), "k") == Failure(TEST_FALSE, exhausted=True)
+    # PDDLStream's tests answer once per input binding: asking again is exhausted at once
+    said_yes = from_test(lambda x: x > 2)
+    assert said_yes.next_outputs((3,), "k") == ()
+    assert said_yes.next_outputs((3,), "k") == Failure(TEST_ANSWERED, exhausted=True)
+    assert said_yes.next_outputs((3,), "other") == ()
     assert fn_from_constant(2.5)("anything") == 2.5
 
 
@@ -168,3 +192,33 @@ def test_a_pddlstream_domain_plans_unchanged(planner: str) -> None:
     assert result.result.bound.cost >= sum(
         abs(values[m.args[1]] - values[m.args[0]]) for m in moves
     )
+
+
+@pytest.mark.parametrize("planner", ["baseline", "learned"])
+def test_a_search_whose_streams_are_all_exhausted_ends_instead_of_asking_again(
+    planner: str,
+) -> None:
+    """PDDLStream's lists, functions and tests say when they have nothing more: once every
+    stream plan is exhausted the run ends as failed; with the rule off it asks them again and
+    again until the budget is spent."""
+    loaded = load_domain_folder(TINY)
+    base = loaded.spec.bindings
+
+    def finite(problem: Any, rng: Any) -> dict[str, Any]:
+        out = dict(base(problem, rng))
+        out["sample-pose"] = from_list_fn(lambda b, r, **fluents: [(6.0,), (6.5,)])
+        out["test-reachable"] = from_test(lambda q: False)  # nothing is ever reachable
+        return out
+
+    exhaustible = dataclasses.replace(
+        loaded, spec=dataclasses.replace(loaded.spec, bindings=finite)
+    )
+    result = plan("tiny-2", planner, domain=exhaustible, seed=0, budget_s=120)
+    assert result.status == "failed", result.message
+    queried = [q for q in result.result.queries if q.stream == "test-reachable"]
+    assert queried and all(q.exhausted for q in queried)
+    if planner == "learned":
+        again = plan("tiny-2", "learned:exhaustion=off", domain=exhaustible, seed=0, budget_s=3)
+        assert again.status == "timeout"
+        asked = [q for q in again.result.queries if q.stream == "test-reachable"]
+        assert len(asked) > len(queried)
