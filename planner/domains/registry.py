@@ -65,6 +65,7 @@ class DomainInfo:
 
 _lock = threading.RLock()
 _cache: dict[tuple[Path, tuple[float, ...]], LoadedDomain] = {}
+_warned: set[Path] = set()  # folders whose inferred declarations were logged
 _extra_folders: list[Path] = []  # added in this process (tamp serve --domain PATH)
 
 
@@ -216,7 +217,8 @@ def _load(spec: DomainSpec, directory: Path, source: str) -> LoadedDomain:
         directory / "domain.pddl", directory / "stream.pddl", strict=spec.strict
     )
     inferred = len(domain.inferred) + len(streams.inferred)
-    if inferred:
+    if inferred and directory not in _warned:  # once per folder and process, not per trial
+        _warned.add(directory)
         log.warning(
             "domain %s: %d declaration%s inferred from use in %s (PDDLStream's leniency); "
             "`tamp check %s` lists them",
