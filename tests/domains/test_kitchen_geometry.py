@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from planner.domains.kitchen.geometry import geometry_from_scene
+from planner.domains.kitchen.samplers import SamplerConfig, _slots
 from planner.scene import SceneError, load_scene
 
 
@@ -63,3 +64,40 @@ def test_stove_is_crowded_by_four_blocks() -> None:
     block = geometry.blocks[0].size
     # The paper's Fig. 1C: four 7 cm blocks only just fit on a ~22 cm stove.
     assert stove.size[0] * stove.size[1] < 12 * block * block
+
+
+PACKED_YAW = 0.1  # radians a packed placement turns off square (samplers.sample_placement)
+
+
+@pytest.mark.parametrize(("scene", "blocks"), [("kitchen-10", 10), ("kitchen-12", 12)])
+def test_long_kitchens_fit_their_blocks_on_the_stove_and_the_table(scene: str, blocks: int) -> None:
+    """kitchen-10 and -12 have the other kitchens' table and sink and a stove with a grid slot
+    for every block: the placement sampler's packed tries (square to the stove, at most
+    ``PACKED_YAW`` off, 1 cm gap, 1 cm jitter) have as many slots as there are blocks, however
+    they turn. Their blocks' seeded start poses draw apart on the table."""
+    geometry = geometry_from_scene(load_scene(scene))
+    kitchen8 = geometry_from_scene(load_scene("kitchen-8"))
+    assert len(geometry.blocks) == blocks
+    assert len({b.color for b in geometry.blocks}) == blocks
+    for kind in ("table", "sink"):
+        assert geometry.platform(kind) == kitchen8.platform(kind)
+    assert geometry.robot == kitchen8.robot and geometry.spawn == kitchen8.spawn
+    xmin, xmax, ymin, ymax = geometry.platform("stove").footprint()
+    config = SamplerConfig()
+    size = geometry.blocks[0].size
+    for yaw in (0.0, PACKED_YAW):
+        half = size / 2 * (math.cos(yaw) + math.sin(yaw))
+        pitch = 2 * half + config.placement_gap + 2 * config.corner_jitter
+        slots = len(_slots(xmin + half, xmax - half, pitch)) * len(
+            _slots(ymin + half, ymax - half, pitch)
+        )
+        assert slots >= blocks, f"{scene}: {slots} stove slots at yaw {yaw}"
+    table = geometry.platform("table")
+    txmin, txmax, tymin, tymax = table.footprint()
+    for seed in range(1000, 1010):
+        poses = list(geometry.initial_poses(seed).values())
+        assert len(poses) == blocks
+        assert all(txmin < p.x < txmax and tymin < p.y < tymax for p in poses)
+        for i, a in enumerate(poses):
+            for b in poses[i + 1 :]:
+                assert math.hypot(a.x - b.x, a.y - b.y) > size * math.sqrt(2)
