@@ -240,13 +240,13 @@ class KitchenEncoder:
             for arg in args:
                 if arg in block_index:
                     ones.add(block_index[arg] * per_block)  # present
+            if predicate == "on" and len(args) == 2 and args[1] in counts:
+                counts[args[1]] += 1  # every block counts, past the padded ones too
             if not args or args[0] not in block_index:
                 continue
             base = block_index[args[0]] * per_block
             if predicate == "on" and len(args) == 2 and args[1] in platform_index:
                 ones.add(base + 1 + platform_index[args[1]])
-                if args[1] in counts:
-                    counts[args[1]] += 1
             elif predicate == "holding":
                 ones.add(base + 1 + n_platforms)
             elif predicate == "at-pose" and len(args) == 2:
