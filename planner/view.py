@@ -249,7 +249,8 @@ class Keyframes:
                 sa.position[1] + f * (sb.position[1] - sa.position[1]),
                 sa.position[2] + f * (sb.position[2] - sa.position[2]),
             )
-            out[name] = BodyState(position, _slerp(sa.quat, sb.quat, f), joints, sa.visible)
+            quat = _slerp(sa.quat, sb.quat, f)
+            out[name] = BodyState(position, quat, joints, sa.visible, sa.attached)
         return out
 
 
