@@ -77,7 +77,7 @@ LOOK_DISTANCE = 1.4  # metres from the selected node's ghost, "Look at the selec
 ROOT_RGB = (90, 90, 90)  # the tree's root
 PANEL_GAP = 1.0  # the tree drawing stands this far beyond the farthest body, metres
 PANEL_HEIGHT = 1.6  # its height, metres
-PANEL_TOP = 2.3  # the height of its root, metres
+PANEL_TOP = 2.3  # the height of its root above the floor (SceneView.floor_z), metres
 PANEL_MIN_WIDTH = 2.4  # its least width, metres
 MAX_LEVEL_STEP = 0.3  # the most height between tree levels, metres
 SLIDER_STEP = 0.1  # seconds
@@ -483,7 +483,8 @@ class RunViewer:
                 plane_opacity=0.0,
             )
         width = max(PANEL_MIN_WIDTH, hi[1] - lo[1])
-        self._panel = _Panel(hi[0] + PANEL_GAP, cy + width / 2, width, PANEL_TOP, PANEL_HEIGHT)
+        top = view.floor_z + PANEL_TOP
+        self._panel = _Panel(hi[0] + PANEL_GAP, cy + width / 2, width, top, PANEL_HEIGHT)
         camera = self._server.initial_camera
         if view.camera is not None:
             camera.position, camera.look_at = view.camera

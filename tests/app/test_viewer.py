@@ -383,6 +383,33 @@ def test_the_tutorial_domain_is_drawn_from_its_scene_description(viewer: RunView
     )
 
 
+def test_the_panda_is_drawn_from_its_scene_description(viewer: RunViewer) -> None:
+    """The Panda's view hook on a real panda-2 run: a ghost per sample in its layer, every
+    failed query marked, the plan played for its moves' seconds, and a selected IK node puts
+    the arm at its configuration."""
+    sink = ListSink()
+    out = solve(RunConfig(scene="panda-2", seed=0, planner="baseline", budget_s=60), sink=sink)
+    plan = out.plan_file()
+    assert plan is not None, out.status
+    events = [event_to_dict(e) for e in sink.events]
+    viewer.show("panda-2", 0, events, plan)
+    assert viewer.note == ""
+    counts = viewer.counts
+    assert {k: counts.get(k, 0) for k in _expected(events)} == _expected(events)
+    assert counts["skipped"] == 0
+    failed = sum(1 for e in events if e["type"] == "node_added" and e["success"] is False)
+    assert counts["failed"] == failed and counts["failed_marked"] == failed
+    moves = [a for a in out.actions if a.name == "move"]
+    assert viewer.plan_seconds == pytest.approx(sum(out.values[a.args[2]].seconds for a in moves))
+    nodes = _nodes(events)
+    ik = next(n for n in nodes.values() if n["stream"] == "inverse-kinematics" and n["success"])
+    viewer.show("panda-2", 0, events, plan, focus=ik["node_id"])
+    joints = viewer.focus_bodies["panda"].joints
+    assert joints is not None
+    arm = [joints[f"panda_joint{i}"] for i in range(1, 8)]
+    assert arm == pytest.approx(ik["outputs"][0]["arm"], abs=1e-6)
+
+
 def _nodes(events: Events) -> dict[int, dict[str, Any]]:
     return {e["node_id"]: e for e in events if e["type"] == "node_added"}
 
