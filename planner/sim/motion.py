@@ -32,8 +32,8 @@ DEFAULT_PLANNER = "rrtconnect"  # RRT-Connect, simplified, as in eTAMP and PDDLS
 class MotionConfig:
     planner: str = DEFAULT_PLANNER  # OMPL planner by name
     # A search stops after ``iterations`` planner iterations, so that its outcome does not
-    # depend on the machine's speed or load (the base's 150 take about 1.1 s on an idle
-    # machine: benchmarks/motion_iterations.py). ``timeout_s`` only guards against a machine
+    # depend on the machine's speed or load (the kitchen base's 150 take about 0.13 s on an
+    # idle machine: benchmarks/motion_iterations.py). ``timeout_s`` only guards against a machine
     # so loaded that they would take longer; a search it stops is logged. None: time only.
     iterations: int | None = 150
     timeout_s: float = 10.0

@@ -76,7 +76,7 @@ class SamplerConfig:
     # base's 100: each further shortcut of an arm path cost more planning than it saved
     # execution (benchmarks/arm_shortcut.py: 100 steps took 1.4 s more per path than 10 to
     # save 0.34 s of motion; whole baseline runs 25% faster in total). 100 iterations of an
-    # arm search take about 1 s on an idle machine (benchmarks/motion_iterations.py).
+    # arm search take about 0.17 s on an idle machine (benchmarks/motion_iterations.py).
     arm_motion: MotionConfig = field(
         default_factory=lambda: MotionConfig(resolution=0.002, shortcut_steps=10, iterations=100)
     )

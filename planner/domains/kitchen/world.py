@@ -10,6 +10,7 @@ import pybullet as p
 from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
 from planner.domains.kitchen.values import Conf, Grasp
 from planner.sim import bodies
+from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
 from planner.sim.pr2_model import (
     ARM_JOINTS,
     ARM_LINKS,
@@ -25,12 +26,18 @@ from planner.sim.transforms import Pose, invert, multiply, planar_pose
 log = logging.getLogger(__name__)
 
 PENETRATION = -0.001  # bodies overlapping by more than 1 mm collide; resting contact does not
+COLLISION = CollisionConfig()  # how robot_collides finds its answer: broad phase, pair filter
 
 
 class KitchenWorld:
-    """One pybullet client holding a kitchen scene; call :meth:`close` (or use ``with``)."""
+    """One pybullet client holding a kitchen scene; call :meth:`close` (or use ``with``).
 
-    def __init__(self, geometry: KitchenGeometry, arm: str) -> None:
+    ``collision`` sets how :meth:`robot_collides` finds its answer (the answer is the same).
+    """
+
+    def __init__(
+        self, geometry: KitchenGeometry, arm: str, *, collision: CollisionConfig = COLLISION
+    ) -> None:
         self.geometry = geometry
         self.arm = arm
         self.client = bodies.connect()
@@ -64,12 +71,30 @@ class KitchenWorld:
         self.tool_link = links[TOOL_LINK[arm]]
         self.arm_links = [links[n] for n in ARM_LINKS[arm]]
         self.base_links = [-1, links[BASE_LINK]]
+        self._base_links = tuple(self.base_links)
         for other in ARMS:
             bodies.set_joints(
                 c, self.robot, [joints[n] for n in ARM_JOINTS[other]], REST_ARM_CONF[other]
             )
+        # The working arm's links against the base (the other arm, torso and head are not
+        # checked against it); the held block against the base, and both against everything.
+        self.collision = RobotCollision(
+            c,
+            self.robot,
+            self_pairs=[(link, base) for link in self.arm_links for base in self.base_links],
+            config=collision,
+        )
         self.held: tuple[str, Grasp] | None = None
+        self._block_in_tool: Pose | None = None  # the held block in the tool frame
         self._placed: dict[str, BlockPose] = {}
+        # The obstacles robot_collides checks, per held block and ignored blocks, with their
+        # boxes; forgotten whenever a block may have moved (set_blocks, another block held).
+        self._obstacles: dict[tuple[str | None, frozenset[str]], Obstacles] = {}
+        # What pybullet holds now, so that a set_* call only resets what changed (a base move
+        # leaves the joints alone, an arm move the base): None until first set.
+        self._base: tuple[float, float, float] | None = None
+        self._torso: float | None = None
+        self._arm: tuple[float, ...] | None = None
 
     def __enter__(self) -> KitchenWorld:
         return self
@@ -85,6 +110,7 @@ class KitchenWorld:
     def set_blocks(self, poses: Mapping[str, BlockPose]) -> None:
         """Put the given blocks at their poses and every other block out of the way."""
         self._placed = dict(poses)
+        self._obstacles.clear()
         for i, (name, body) in enumerate(self.blocks.items()):
             if name in poses:
                 bodies.set_pose(self.client, body, block_pose_to_pose(poses[name]))
@@ -93,32 +119,48 @@ class KitchenWorld:
 
     def hold(self, block: str | None, grasp: Grasp | None = None) -> None:
         """Attach a block to the gripper (it then follows every :meth:`set_conf`)."""
-        self.held = None if block is None or grasp is None else (block, grasp)
+        held = None if block is None or grasp is None else (block, grasp)
+        if (None if held is None else held[0]) != (None if self.held is None else self.held[0]):
+            self._obstacles.clear()  # a block let go of stays where the hand left it
+        self.held = held
+        self._block_in_tool = None if held is None else invert(held[1].tool_in_block)
 
     def set_base(self, base: tuple[float, float, float]) -> None:
-        bodies.set_pose(self.client, self.robot, planar_pose(*base))
+        self._put_base(base)
         self._update_held()
 
     def set_arm(self, arm: tuple[float, ...]) -> None:
-        bodies.set_joints(self.client, self.robot, self.arm_joints, arm)
+        self._put_arm(arm)
         self._update_held()
 
     def set_conf(self, conf: Conf, *, approach: bool = False) -> None:
-        bodies.set_pose(self.client, self.robot, planar_pose(*conf.base))
-        bodies.set_joints(self.client, self.robot, [self.torso_joint], [conf.torso])
-        arm = conf.approach_arm if approach and conf.approach_arm is not None else conf.arm
-        bodies.set_joints(self.client, self.robot, self.arm_joints, arm)
+        self._put_base(conf.base)
+        if conf.torso != self._torso:
+            bodies.set_joints(self.client, self.robot, [self.torso_joint], [conf.torso])
+            self._torso = conf.torso
+        self._put_arm(conf.approach_arm if approach and conf.approach_arm is not None else conf.arm)
         self._update_held()
+
+    def _put_base(self, base: tuple[float, float, float]) -> None:
+        if base != self._base:
+            bodies.set_pose(self.client, self.robot, planar_pose(*base))
+            self._base = (base[0], base[1], base[2])
+
+    def _put_arm(self, arm: tuple[float, ...]) -> None:
+        if arm != self._arm:
+            p.resetJointStatesMultiDof(
+                self.robot, self.arm_joints, [[q] for q in arm], physicsClientId=self.client
+            )
+            self._arm = tuple(arm)
 
     def tool_pose(self) -> Pose:
         return bodies.link_pose(self.client, self.robot, self.tool_link)
 
     def _update_held(self) -> None:
-        if self.held is None:
+        if self.held is None or self._block_in_tool is None:
             return
-        name, grasp = self.held
-        pose = multiply(self.tool_pose(), invert(grasp.tool_in_block))
-        bodies.set_pose(self.client, self.blocks[name], pose)
+        pose = multiply(self.tool_pose(), self._block_in_tool)
+        bodies.set_pose(self.client, self.blocks[self.held[0]], pose)
 
     # --- collisions --------------------------------------------------------------------------
 
@@ -129,40 +171,19 @@ class KitchenWorld:
         ``clearance`` resting contact is allowed and only overlaps over 1 mm count; planners ask
         for a clearance so that what they plan between checked states stays free too.
         """
-        margin = clearance if clearance > 0 else PENETRATION
-
-        def touch(a: int, b: int, *, link_a: int | None = None) -> bool:
-            return bodies.in_contact(self.client, a, b, margin=margin, link_a=link_a)
-
-        skip = set(ignore)
         held = self.held[0] if self.held else None
-        obstacles = list(self.fixtures.values()) + [
-            self.blocks[n] for n in self._placed if n not in skip and n != held
-        ]
-        for body in obstacles:
-            if touch(self.robot, body):
-                return True
-        for link in self.arm_links:
-            for base_link in self.base_links:
-                pts = p.getClosestPoints(
-                    self.robot,
-                    self.robot,
-                    distance=margin,
-                    linkIndexA=link,
-                    linkIndexB=base_link,
-                    physicsClientId=self.client,
-                )
-                if pts:
-                    return True
-        if held is not None:
-            body = self.blocks[held]
-            for other in obstacles:
-                if touch(body, other):
-                    return True
-            for base_link in self.base_links:
-                if touch(self.robot, body, link_a=base_link):
-                    return True
-        return False
+        key = (held, frozenset(ignore))
+        obstacles = self._obstacles.get(key)
+        if obstacles is None:
+            members = list(self.fixtures.values()) + [
+                self.blocks[n] for n in self._placed if n not in key[1] and n != held
+            ]
+            obstacles = self._obstacles[key] = Obstacles(self.client, members)
+        return self.collision.collides(
+            obstacles,
+            margin=clearance if clearance > 0 else PENETRATION,
+            attached=None if held is None else Attached(self.blocks[held], self._base_links),
+        )
 
     def block_collides(self, name: str, *, margin: float) -> bool:
         """Block ``name`` (at its current pose) against the other placed blocks, with margin."""
