@@ -15,6 +15,7 @@ from planner.abstract.skeleton import GroundAction
 from planner.domains import load_domain
 from planner.domains.panda.geometry import geometry_from_scene
 from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
+from planner.domains.panda.robot import LOWER, UPPER
 from planner.domains.panda.samplers import PandaSamplers, grasp_height, tool_target
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.world import PandaWorld
@@ -227,3 +228,30 @@ def test_the_validator_sees_a_collision_along_a_trajectory() -> None:
     actions = [GroundAction("move", (START_CONF, "q1", "t1"))]
     check = validate_plan(actions, {"q1": through, "t1": traj}, problem)
     assert not check.ok and "collision" in check.message
+
+
+def test_the_broad_phase_answers_as_every_exact_query_does() -> None:
+    from planner.sim.collision import CollisionConfig
+
+    problem = _problem(6, 1001)
+    geometry = geometry_of(problem)
+    poses = {b.name: problem.values[initial_pose_name(b.name)] for b in geometry.blocks}
+    rng = random.Random(5)
+    exact_config = CollisionConfig(broad_phase=False, pair_filter=False)
+    with PandaWorld(geometry) as fast, PandaWorld(geometry, collision=exact_config) as exact:
+        hits = 0
+        for i in range(300):
+            holding = i % 2 == 1
+            arm = tuple(rng.uniform(lo, hi) for lo, hi in zip(LOWER, UPPER, strict=True))
+            for world in (fast, exact):
+                world.set_blocks({k: v for k, v in poses.items() if k != "b2" or not holding})
+                world.hold("b2" if holding else None, Grasp(0.0, 0.0) if holding else None)
+                world.set_arm(arm)
+            for clearance in (0.0, 0.01, 0.05):
+                answer = exact.robot_collides(clearance=clearance)
+                assert fast.robot_collides(clearance=clearance) == answer
+                assert fast.hand_collides(clearance=clearance) == exact.hand_collides(
+                    clearance=clearance
+                )
+                hits += answer
+        assert 0 < hits < 900  # both answers occur

@@ -21,11 +21,13 @@ from planner.domains.panda.robot import (
 )
 from planner.domains.panda.values import BlockPose, Grasp
 from planner.sim import bodies
+from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
 from planner.sim.transforms import Pose, invert, multiply
 
 log = logging.getLogger(__name__)
 
 PENETRATION = -0.001  # bodies overlapping by more than 1 mm collide; resting contact does not
+COLLISION = CollisionConfig()  # how the queries find their answer: broad phase, pair filter
 TABLE_THICKNESS = 0.04  # the table top's slab below z = 0
 HIDDEN_Z = -10.0  # blocks not in the scene wait this far below the floor
 # Links of the arm that can reach its base and first links (self-collision pairs worth checking):
@@ -80,7 +82,7 @@ def fixture_boxes(
 class PandaWorld:
     """One pybullet client holding a Panda tabletop; call :meth:`close` (or use ``with``)."""
 
-    def __init__(self, geometry: PandaGeometry) -> None:
+    def __init__(self, geometry: PandaGeometry, *, collision: CollisionConfig = COLLISION) -> None:
         self.geometry = geometry
         self.client = c = bodies.connect()
         self.fixtures = _fixtures(c, geometry)
@@ -112,6 +114,11 @@ class PandaWorld:
         self.held: tuple[str, Grasp, Pose] | None = None  # block, grasp, block in the tool frame
         self.placed: dict[str, BlockPose] = {}
         self.set_fingers(FINGER_OPEN)
+        self.collision = RobotCollision(c, self.robot, self_pairs=self.self_pairs, config=collision)
+        self.hand_collision = RobotCollision(c, self.robot, links=self.hand_links, config=collision)
+        # The obstacles (with their boxes) per held block, ignored blocks and checker; forgotten
+        # whenever a block may have moved (set_blocks, hold).
+        self._obstacles: dict[tuple[str | None, frozenset[str], bool], Obstacles] = {}
 
     def __enter__(self) -> PandaWorld:
         return self
@@ -127,6 +134,7 @@ class PandaWorld:
     def set_blocks(self, poses: Mapping[str, BlockPose]) -> None:
         """Put the given blocks at their poses and every other block (but the held one) away."""
         self.placed = dict(poses)
+        self._obstacles.clear()
         held = self.held[0] if self.held else None
         for name in self.blocks:
             if name != held or name in poses:
@@ -143,6 +151,7 @@ class PandaWorld:
 
     def hold(self, block: str | None, grasp: Grasp | None = None, *, flip: bool = False) -> None:
         """Close the hand on a block (it then follows every :meth:`set_arm`), or open it."""
+        self._obstacles.clear()
         if self.held is not None:  # the block let go of goes back where it stands, or away
             name = self.held[0]
             self.held = None
@@ -187,48 +196,38 @@ class PandaWorld:
             skip.add(self.held[0])
         return [*self.fixtures.values(), *(self.blocks[n] for n in self.placed if n not in skip)]
 
+    def _obstacle_set(self, ignore: Iterable[str], *, hand: bool) -> Obstacles:
+        held = self.held[0] if self.held is not None else None
+        key = (held, frozenset(ignore), hand)
+        found = self._obstacles.get(key)
+        if found is None:
+            table = self.fixtures["table"]
+            # The arm's base stands on the table: only the links that move are checked there.
+            links = None if hand else {table: self.moving_links}
+            found = Obstacles(self.client, self.obstacles(ignore), links=links)
+            self._obstacles[key] = found
+        return found
+
     def robot_collides(self, *, ignore: Iterable[str] = (), clearance: float = 0.0) -> bool:
         """The arm (and what it holds) against the table, trays, shelves, placed blocks and
         itself. ``ignore`` names blocks the hand may touch (the one it closes on). Without
         ``clearance`` resting contact is allowed and only overlaps over 1 mm count."""
-        margin = clearance if clearance > 0 else PENETRATION
-        c, robot = self.client, self.robot
-        table = self.fixtures["table"]
-        for body in self.obstacles(ignore):
-            links = self.moving_links if body == table else [None]
-            for link in links:
-                if bodies.in_contact(c, robot, body, margin=margin, link_a=link):
-                    return True
-        for a, b in self.self_pairs:
-            if p.getClosestPoints(
-                robot, robot, distance=margin, linkIndexA=a, linkIndexB=b, physicsClientId=c
-            ):
-                return True
-        if self.held is not None:
-            held = self.blocks[self.held[0]]
-            for body in self.obstacles(ignore):
-                if bodies.in_contact(c, held, body, margin=margin):
-                    return True
-            for link in self.held_against:
-                if p.getClosestPoints(
-                    held, robot, distance=margin, linkIndexB=link, physicsClientId=c
-                ):
-                    return True
-        return False
+        held = self.blocks[self.held[0]] if self.held is not None else None
+        return self.collision.collides(
+            self._obstacle_set(ignore, hand=False),
+            margin=clearance if clearance > 0 else PENETRATION,
+            attached=None if held is None else Attached(held, tuple(self.held_against)),
+        )
 
     def hand_collides(self, *, clearance: float = 0.0) -> bool:
         """The hand and fingers (and what they hold) against the fixtures and placed blocks:
         where the hand is set by the tool's pose alone, whatever the arm's joints."""
-        margin = clearance if clearance > 0 else PENETRATION
-        c, robot = self.client, self.robot
         held = self.blocks[self.held[0]] if self.held is not None else None
-        for body in self.obstacles():
-            for link in self.hand_links:
-                if bodies.in_contact(c, robot, body, margin=margin, link_a=link):
-                    return True
-            if held is not None and bodies.in_contact(c, held, body, margin=margin):
-                return True
-        return False
+        return self.hand_collision.collides(
+            self._obstacle_set((), hand=True),
+            margin=clearance if clearance > 0 else PENETRATION,
+            attached=None if held is None else Attached(held, ()),
+        )
 
     def block_collides(self, name: str, *, margin: float) -> bool:
         """Block ``name`` (where it is) against the other placed blocks and the fixtures but the
