@@ -219,6 +219,36 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--ray-address", help="run the trials as Ray tasks: ADDRESS, auto, or local")
     be.add_argument("--resume", metavar="BENCH_ID", help="run the missing trials of a benchmark")
 
+    ho = sub.add_parser(
+        "horizon",
+        help="the horizon curve: planning and total time against the number of objects",
+        description="One benchmark per scene (the planners paired on the same seeds), taken "
+        "from --db when one with the same settings is there (resumed if it did not finish), "
+        "then the curve of each planner's mean planning and total seconds against the number "
+        "of objects the scene's goal names, as a figure (.html: plotly, .svg: plain) and a "
+        "table. Rerun the command to go on after an interruption.",
+    )
+    ho.add_argument(
+        "--scenes", required=True, help="comma-separated scenes of one domain: kitchen-2,kitchen-4"
+    )
+    ho.add_argument("--domain", help=DOMAIN_HELP)
+    ho.add_argument(
+        "--planners", default="baseline,paper,learned", help="as tamp bench (default: the three)"
+    )
+    ho.add_argument("--trials", type=int, default=20, help="seeds per scene (default 20)")
+    ho.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")
+    ho.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
+    ho.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
+    ho.add_argument("--model", help="model file for the learned planner (default: the domain's)")
+    ho.add_argument("--db", type=_store, help=STORE_HELP)
+    ho.add_argument("--ray-address", help="run the trials as Ray tasks: ADDRESS, auto, or local")
+    ho.add_argument("--out", type=Path, help="figure: FILE.html (plotly) or FILE.svg")
+    ho.add_argument(
+        "--no-run",
+        action="store_true",
+        help="run nothing: draw the benchmarks the store already has (finished seeds only)",
+    )
+
     rp = sub.add_parser(
         "report",
         help="report of a benchmark: figures, table, paired improvement",
@@ -608,6 +638,54 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_horizon(args: argparse.Namespace) -> int:
+    from planner.bench import make_config
+    from planner.experiment import stderr_progress
+    from planner.horizon import find_bench, points, run_horizon, table_markdown, write
+    from planner.store import default_db_path
+
+    db = args.db or default_db_path()
+    scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
+    planners = args.planners.split(",")
+    settings: dict[str, Any] = {
+        "trials": args.trials,
+        "seed_start": args.seed_start,
+        "budget_s": args.budget,
+        "model": args.model,
+        "domain": args.domain,
+    }
+    if args.no_run:
+        ids = []
+        for scene in scenes:
+            found = find_bench(db, make_config(scene, planners, **settings))
+            if found is None:
+                print(f"  {scene}: no benchmark with these settings in {db}", file=sys.stderr)
+            else:
+                ids.append(found[0])
+    else:
+        ids = run_horizon(
+            db,
+            scenes,
+            planners,
+            **settings,
+            workers=args.workers,
+            ray_address=args.ray_address,
+            progress=stderr_progress,
+        )
+        if sys.stderr.isatty():
+            sys.stderr.write("\n")
+    pts = points(db, ids)
+    if not pts:
+        raise ValueError("no benchmark to draw: run without --no-run first")
+    print(table_markdown(pts))
+    if args.out:
+        title = f"{', '.join(dict.fromkeys(p.planner for p in pts))}: seconds by objects"
+        for path in write(pts, args.out, title=title):
+            print(f"wrote {path}")
+    print(f"benchmarks {', '.join(ids)} in {db}")
+    return 0
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     from planner.report import render_html, summarize, table_markdown
     from planner.store import RunStore, default_db_path
@@ -778,6 +856,7 @@ COMMANDS = {
     "report": cmd_report,
     "validate": cmd_validate,
     "render": cmd_render,
+    "horizon": cmd_horizon,
     "scenes": cmd_scenes,
     "domains": cmd_domains,
     "check": cmd_check,
@@ -794,7 +873,7 @@ def _model_errors() -> tuple[type[Exception], ...]:
     return (ModelError,)
 
 
-LONG_COMMANDS = ("plan", "collect", "bench", "train")
+LONG_COMMANDS = ("plan", "collect", "bench", "horizon", "train")
 
 
 def _interrupt_on_term() -> None:
