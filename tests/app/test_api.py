@@ -155,6 +155,21 @@ def test_launch_stream_and_read_a_run(client: TestClient) -> None:
 
 
 @pytest.mark.slow
+def test_the_panda_plans_through_the_api_with_its_shipped_model(client: TestClient) -> None:
+    scenes = {s["name"]: s for s in client.get("/api/scenes").json()}
+    assert scenes["panda-6"]["domain"] == "panda" and scenes["panda-6"]["blocks"] == 6
+    models = {m["domain"] for m in client.get("/api/models").json() if m["default"]}
+    assert {"kitchen", "panda"} <= models
+    body = {"scene": "panda-2", "seed": 1000, "planner": "learned", "budget_s": 120}
+    run = client.post("/api/runs", json=body).json()
+    assert _wait_status(client, run["id"], {"solved", "failed", "timeout"}) == "solved"
+    events = client.get(f"/api/runs/{run['id']}/events", params={"limit": 5000}).json()
+    finished = events["events"][-1]
+    assert finished["type"] == "run_finished" and finished["valid"] is True
+    assert any(e["type"] == "model_prediction" for e in events["events"])
+
+
+@pytest.mark.slow
 def test_queue_cancel_and_429(tmp_path: Path, store_url: str) -> None:
     settings = _settings(tmp_path, store_url, max_running=1, max_queued=1, cancel_grace_s=2.0)
     with _client(settings) as client:
