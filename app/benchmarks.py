@@ -29,6 +29,7 @@ from typing import Any
 
 from app import bench_worker, catalog
 from app.errors import BusyError, NotLiveError, RequestError
+from app.horizon import Horizon
 from planner.bench import BenchConfig, BenchError, create_bench, make_config
 from planner.planners import get_planner
 from planner.report import summarize
@@ -152,15 +153,21 @@ class BenchService:
         self._messages: dict[str, str] = {}  # why a benchmark of this server stopped
         self._summaries: OrderedDict[tuple[Any, ...], dict[str, Any]] = OrderedDict()
         self._closing = threading.Event()
+        self.horizon = Horizon(self)  # the horizon curves of the store's benchmarks
         self._thread = threading.Thread(target=self._watch, name="benchmarks", daemon=True)
         self._thread.start()
 
     # --- reading -----------------------------------------------------------------------------
 
+    def listed(self) -> list[tuple[BenchRecord, BenchInfo]]:
+        """Every benchmark of the store, newest first: its record (the whole configuration)
+        and what the list shows of it."""
+        counts = self.store.bench_progress()
+        return [(r, self._with(r, counts.get(r.id, {}))) for r in self.store.list_benches()]
+
     def list(self) -> list[BenchInfo]:
         """Every benchmark of the store, newest first, with its progress."""
-        counts = self.store.bench_progress()
-        return [self._with(r, counts.get(r.id, {})) for r in self.store.list_benches()]
+        return [info for _, info in self.listed()]
 
     def get(self, bench_id: str) -> BenchInfo:
         """KeyError (listing the known ones) for an unknown benchmark."""
@@ -171,11 +178,7 @@ class BenchService:
         """The benchmark and :func:`planner.report.summarize` of it (the figures of
         ``tamp report``), kept while its trials and status are unchanged."""
         info = self.get(bench_id)
-        key = (
-            bench_id,
-            info.status,
-            tuple(sorted((p, v.done, v.solved) for p, v in info.progress.items())),
-        )
+        key = self.summary_key(info)
         with self._lock:
             kept = self._summaries.get(key)
             if kept is not None:
@@ -187,6 +190,15 @@ class BenchService:
             while len(self._summaries) > KEPT_SUMMARIES:
                 self._summaries.popitem(last=False)
         return info, summary
+
+    @staticmethod
+    def summary_key(info: BenchInfo) -> tuple[Any, ...]:
+        """What a benchmark's summary depends on: while it is unchanged, a kept one is right."""
+        return (
+            info.id,
+            info.status,
+            tuple(sorted((p, v.done, v.solved) for p, v in info.progress.items())),
+        )
 
     def _with(self, record: BenchRecord, counts: dict[str, dict[str, int]]) -> BenchInfo:
         with self._lock:

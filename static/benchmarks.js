@@ -2,10 +2,11 @@
 // a launch form, and one benchmark: progress bar and cancel, the paper's Fig. 2 scatter (one
 // planner on each axis, a click opens the two runs in the compare view), the per-planner table
 // and the paired improvement with its interval. The figures are planner.report.summarize's,
-// the code of `tamp report` (GET /api/benchmarks/{id}).
+// the code of `tamp report` (GET /api/benchmarks/{id}). Below, the horizon curves (horizon.js).
 
 import { ApiError, api } from "./api.js";
 import { escapeHtml, seconds, when } from "./format.js";
+import { HorizonPanel } from "./horizon.js";
 
 const POLL_RUNNING_MS = 1000; // a running benchmark's page and the list while one runs
 const POLL_IDLE_MS = 8000;
@@ -64,6 +65,12 @@ export class BenchPage {
     });
     this.el.planners.addEventListener("change", () => this._syncModel());
     this.el.scene.addEventListener("change", () => this._syncModel());
+    this.horizon = new HorizonPanel($("horizon"), {
+      open: (id) => {
+        location.hash = `#bench=${encodeURIComponent(id)}`;
+        this.el.detail.scrollIntoView({ block: "start" });
+      },
+    });
     this.el.list.addEventListener("click", (e) => {
       const row = e.target.closest("[data-bench-id]");
       if (row) location.hash = `#bench=${encodeURIComponent(row.dataset.benchId)}`;
@@ -162,6 +169,7 @@ export class BenchPage {
       this.benches = await api("/api/benchmarks");
       this.el.listError.hidden = true;
       this._renderList();
+      if (this.visible) this.horizon.follow(this.benches);
     } catch (err) {
       this.el.listError.textContent = `Cannot load benchmarks: ${err.message}`;
       this.el.listError.hidden = false;

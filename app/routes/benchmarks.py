@@ -1,16 +1,18 @@
 """Benchmarks: listed with their progress, one with its summary (``tamp report``'s figures),
-launched, cancelled and resumed (``app/benchmarks.py``)."""
+launched, cancelled and resumed (``app/benchmarks.py``); their horizon curves
+(``app/horizon.py``)."""
 
 from __future__ import annotations
 
 from dataclasses import asdict
 from typing import Annotated, Any
 
-from fastapi import APIRouter, HTTPException, Path
+from fastapi import APIRouter, HTTPException, Path, Query
 
 from app.benchmarks import BenchInfo
 from app.deps import COMMON_RESPONSES, ERROR, Dash, bad_field, not_found
 from app.errors import BusyError, NotLiveError, RequestError
+from app.horizon import HorizonSeries
 from app.schemas import BenchDetail, BenchOut, BenchRequest, ResumeRequest
 
 router = APIRouter(prefix="/api/benchmarks", tags=["benchmarks"], responses=COMMON_RESPONSES)
@@ -50,6 +52,50 @@ def launch(body: BenchRequest, dash: Dash) -> BenchOut:
     except BusyError as exc:
         raise HTTPException(429, detail=str(exc)) from exc
     return _out(info)
+
+
+@router.get("/horizon")
+def horizon(
+    dash: Dash,
+    domain: Annotated[
+        str | None, Query(min_length=1, max_length=100, description="the domain's name")
+    ] = None,
+    planners: Annotated[
+        str | None,
+        Query(
+            min_length=1,
+            max_length=500,
+            pattern=r"^[^,\s]+(,[^,\s]+)*$",
+            description="the planners in their order, as tamp horizon takes them: "
+            "baseline,paper,learned",
+        ),
+    ] = None,
+    trials: Annotated[int | None, Query(ge=1, le=10**6, description="seeds per scene")] = None,
+    seed_start: Annotated[int | None, Query(ge=0, le=2**62, description="the first seed")] = None,
+    budget_s: Annotated[
+        float | None, Query(gt=0, le=10**6, description="seconds per trial")
+    ] = None,
+    model: Annotated[
+        str | None, Query(min_length=1, max_length=100, description="the model file's name")
+    ] = None,
+) -> list[HorizonSeries]:
+    """The horizon curves the store's benchmarks make (``tamp horizon``'s): benchmarks of one
+    domain with the same planners, seeds, budget and model over different scenes, each series
+    with its points (per scene and planner: mean planning and total seconds, unsolved at the
+    budget, with 95% bootstrap intervals) by the number of objects the scene's goal names.
+    Done benchmarks, and running ones with the seeds every planner finished; newest first.
+    The parameters pick the series with those settings."""
+    try:
+        return dash.benches.horizon.series(
+            domain=domain,
+            planners=planners,
+            trials=trials,
+            seed_start=seed_start,
+            budget_s=budget_s,
+            model=model,
+        )
+    except RequestError as exc:
+        raise bad_field(exc.field, str(exc), where="query") from exc
 
 
 @router.get("/{bench_id}", responses={404: ERROR})

@@ -702,3 +702,83 @@ def test_a_benchmark_cancelled_from_the_page_keeps_its_trials(page: Any, server:
         f"Resume the {30 - kept} missing trials"
     )
     assert page.locator("[data-testid=bench-trials-table] tr[data-seed]").count() == kept
+
+
+def _plot_point(page: Any, chart: str, trace: int, index: int) -> dict[str, float]:
+    """Where plotly draws point ``index`` of trace ``trace`` of the chart with id ``chart``."""
+    return dict(
+        page.evaluate(
+            """([id, t, k]) => {
+                const el = document.getElementById(id);
+                const full = el._fullLayout;
+                const rect = el.getBoundingClientRect();
+                return {
+                    x: rect.left + full._size.l + full.xaxis.l2p(el.data[t].x[k]),
+                    y: rect.top + full._size.t + full.yaxis.l2p(el.data[t].y[k]),
+                };
+            }""",
+            [chart, trace, index],
+        )
+    )
+
+
+def test_the_horizon_panel_draws_a_series_and_opens_its_benchmarks(
+    page: Any, server: Server
+) -> None:
+    from planner.bench import make_config, run_bench
+
+    page.goto(f"{server.url}/#benchmarks")
+    # The other tests' benchmarks are one scene each: no series.
+    empty = page.locator("[data-testid=horizon-empty]")
+    empty.wait_for()
+    assert "No series yet: tamp horizon --scenes" in empty.inner_text()
+
+    # Two scenes with the same settings, run the way tamp horizon runs them, while the page is
+    # open: it follows the benchmarks list and draws the series once both are done.
+    planners = ["baseline", "sequential"]
+    ids = [
+        run_bench(
+            server.db,
+            make_config(
+                scene, planners, trials=2, seed_start=5000, budget_s=30, domain=str(TABLETOP)
+            ),
+            workers=4,
+        )[0]
+        for scene in ("tabletop-1", "tabletop-2")
+    ]
+    [series] = server.api("/api/benchmarks/horizon?planners=baseline,sequential&seed_start=5000")
+    charts = ("horizon-planning", "horizon-total")
+    page.wait_for_function(
+        "ids => ids.every((id) => document.getElementById(id)?.dataset.points === '4')",
+        arg=list(charts),
+        timeout=60_000,
+    )
+    select = page.locator("[data-testid=horizon-series]")
+    assert select.input_value() == series["key"]
+    assert select.locator("option:checked").inner_text() == (
+        "tabletop2d: baseline, sequential — 2 seeds, 30 s"
+    )
+    for chart, measure in zip(charts, ("planning", "total"), strict=True):
+        traces = page.evaluate(
+            f"document.getElementById('{chart}').data.map((t) => [t.name, t.y, t.error_y.array])"
+        )
+        assert [t[0] for t in traces] == planners  # one line per planner
+        for (_, ys, ups), planner in zip(traces, planners, strict=True):
+            mine = [p[measure] for p in series["points"] if p["planner"] == planner]
+            assert ys == pytest.approx([m[0] for m in mine])  # objects 1 then 2
+            assert ups == pytest.approx([m[2] - m[0] for m in mine])  # the interval as bars
+
+    # A hover names the scene, the seeds solved and the benchmark; a click opens it.
+    page.locator("#horizon-total").scroll_into_view_if_needed()
+    point = _plot_point(page, "horizon-total", 0, 1)  # baseline on tabletop-2
+    page.mouse.move(point["x"], point["y"])
+    hover = page.locator("#horizon-total .hoverlayer .hovertext").first
+    hover.wait_for()
+    text = hover.text_content() or ""
+    assert "tabletop-2" in text and "solved 2 / 2 seeds" in text and ids[1] in text, text
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / "horizon.png"), full_page=True)
+    page.mouse.click(point["x"], point["y"])
+    page.wait_for_function(f"location.hash === '#bench={ids[1]}'")
+    page.wait_for_function(f"(document.body.dataset.bench ?? '').startsWith('{ids[1]}:')")
+    assert "tabletop-2" in page.locator("[data-testid=bench-head]").inner_text()
