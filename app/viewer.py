@@ -644,6 +644,12 @@ class RunViewer:
             with self._server.atomic():
                 for layer, ghosts in fold.ghosts.items():
                     self._shown[layer] = self._draw_layer(fold, layer, ghosts)
+                # A layer drawn before that this state has no ghosts in at all (the page
+                # stepped back to before its first) goes.
+                for name in [n for n in self._layers if n.startswith("/search/")]:
+                    if name.removeprefix("/search/") not in fold.ghosts:
+                        self._drop(name)
+                        self._shown.pop(name.removeprefix("/search/"), None)
                 self._shown["failed_marked"] = self._draw_failures(fold)
                 self._shown["tree_nodes"] = self._draw_tree(fold)
                 self._draw_focus(fold)

@@ -142,6 +142,19 @@ def test_show_a_prefix_then_extend_with_the_rest(
     assert counts["failed"] == 0 and counts["skipped"] == 0
 
 
+def test_stepping_back_takes_away_the_ghosts_of_later_steps(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, plan = kitchen_run
+    viewer.show("kitchen-1", 0, events, plan)
+    assert viewer.counts["motions"] > 0
+    motions = [i for i, e in enumerate(events) if e.get("stream") == "plan-motion"]
+    viewer.show("kitchen-1", 0, events[: motions[0]], plan)  # the same run, stepped back
+    counts = viewer.counts
+    assert counts.get("motions", 0) == 0 and counts["confs"] == 1
+    assert not any(name.startswith("/search/motions") for name in viewer._layers)
+
+
 def test_the_plan_plays_for_its_duration(
     viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
 ) -> None:
@@ -282,6 +295,33 @@ def _changed(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.mean(np.abs(a - b).sum(axis=2) > 40))
 
 
+WAIT_S = 60.0  # a state reached in a second or two when idle; a busy machine is slower
+
+
+def _until(reached: Any, what: str) -> None:
+    """Until ``reached()`` is true (``what`` names it when it never is)."""
+    deadline = time.monotonic() + WAIT_S
+    while not reached():
+        assert time.monotonic() < deadline, what
+        time.sleep(0.1)
+
+
+def _still(page: Any, path: Path, unlike: Path | None = None) -> None:
+    """Save to ``path`` the 3D view once the software renderer has drawn it: two screenshots in
+    a row the same, and (given ``unlike``) the view visibly changed from that screenshot."""
+    before = _scene_pixels(unlike) if unlike is not None else None
+    last: np.ndarray | None = None
+    deadline = time.monotonic() + WAIT_S
+    while True:
+        page.screenshot(path=str(path))
+        now = _scene_pixels(path)
+        drawn = before is None or _changed(before, now) > 0.005
+        if last is not None and drawn and _changed(last, now) < 0.0005:
+            return
+        assert time.monotonic() < deadline, f"the view did not settle for {path.name}"
+        last = now
+
+
 def test_the_view_renders_in_a_browser_and_plays(
     viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
 ) -> None:
@@ -305,41 +345,32 @@ def test_the_view_renders_in_a_browser_and_plays(
         try:
             page = browser.new_page()
             page.goto(viewer.url)
-            page.wait_for_selector("canvas", timeout=30_000)
-            page.get_by_text("kitchen-1").first.wait_for(timeout=30_000)
+            page.set_default_timeout(WAIT_S * 1000)
+            page.wait_for_selector("canvas")
+            page.get_by_text("kitchen-1").first.wait_for()
             notice = page.locator(".mantine-Notification-root button")  # "Software WebGL ..."
             if notice.count():
                 notice.first.click()
-            time.sleep(3.0)  # the software renderer draws the meshes
-            page.screenshot(path=str(shots["start"]))
+            _still(page, shots["start"])
 
             page.get_by_role("button", name="Play").click()
-            deadline = time.monotonic() + 10
-            while viewer.playhead <= 0.5 and time.monotonic() < deadline:
-                time.sleep(0.1)
-            assert viewer.playhead > 0.5  # the plan plays
+            _until(lambda: viewer.playhead > 0.5, "the plan did not play")
             page.get_by_role("button", name="Pause").click()
-            time.sleep(1.5)  # a few frames of the software renderer
-            page.screenshot(path=str(ARTIFACTS / "viewer.png"))
+            _still(page, ARTIFACTS / "viewer.png")
 
             track = page.locator(".mantine-Slider-root").bounding_box()  # the Time slider
             assert track is not None
             page.mouse.click(track["x"] + track["width"] / 2, track["y"] + track["height"] / 2)
-            deadline = time.monotonic() + 10
-            while abs(viewer.playhead - duration / 2) > 0.1 * duration:
-                assert time.monotonic() < deadline, f"the slider left {viewer.playhead} s"
-                time.sleep(0.1)
-            time.sleep(1.5)
-            page.screenshot(path=str(shots["mid"]))
+            _until(
+                lambda: abs(viewer.playhead - duration / 2) <= 0.1 * duration,
+                "the slider did not take the plan to its middle",
+            )
+            _still(page, shots["mid"], unlike=shots["start"])
 
             page.get_by_role("slider").focus()
             page.keyboard.press("End")
-            deadline = time.monotonic() + 10
-            while viewer.playhead < duration:
-                assert time.monotonic() < deadline, f"End left the plan at {viewer.playhead} s"
-                time.sleep(0.1)
-            time.sleep(1.5)
-            page.screenshot(path=str(shots["end"]))
+            _until(lambda: viewer.playhead >= duration, "End did not take the plan to its end")
+            _still(page, shots["end"], unlike=shots["mid"])
         finally:
             browser.close()
     image = iio.imread(shots["start"])
@@ -479,12 +510,12 @@ def test_a_selected_tabletop_node_moves_the_gripper(viewer: RunViewer) -> None:
 
 def _wait_picked(client: TestClient, count: int) -> dict[str, Any]:
     """What GET /api/viewer says was clicked, once it has seen ``count`` clicks."""
-    deadline = time.monotonic() + 10
+    deadline = time.monotonic() + WAIT_S
     while True:
         picked = client.get("/api/viewer").json()["picked"]
         if picked is not None and picked["count"] >= count:
             return dict(picked)
-        assert time.monotonic() < deadline, f"no click #{count} named after 10 s: {picked}"
+        assert time.monotonic() < deadline, f"no click #{count} named after {WAIT_S} s: {picked}"
         time.sleep(0.05)
 
 
@@ -514,7 +545,7 @@ def test_a_click_on_a_ghost_names_its_node_to_the_page(tmp_path: Path) -> None:
         assert client.get("/api/viewer").json()["picked"] is None
         client.put("/api/viewer", json={"run_id": result.run_id, "step": None}).raise_for_status()
         view = client.app.state.dashboard.viewer.viewer  # type: ignore[attr-defined]
-        deadline = time.monotonic() + 30
+        deadline = time.monotonic() + WAIT_S
         while view.counts.get("confs") != len(confs):  # every configuration drawn as a ghost
             assert time.monotonic() < deadline, view.counts
             time.sleep(0.1)
