@@ -29,7 +29,6 @@ from typing import Any
 
 from app import bench_worker, catalog
 from app.errors import BusyError, NotLiveError, RequestError
-from app.horizon import Horizon
 from planner.bench import BenchConfig, BenchError, create_bench, make_config
 from planner.planners import get_planner
 from planner.report import summarize
@@ -153,7 +152,6 @@ class BenchService:
         self._messages: dict[str, str] = {}  # why a benchmark of this server stopped
         self._summaries: OrderedDict[tuple[Any, ...], dict[str, Any]] = OrderedDict()
         self._closing = threading.Event()
-        self.horizon = Horizon(self)  # the horizon curves of the store's benchmarks
         self._thread = threading.Thread(target=self._watch, name="benchmarks", daemon=True)
         self._thread.start()
 

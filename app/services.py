@@ -12,6 +12,7 @@ from app import catalog
 from app.benchmarks import BenchService
 from app.compare import Trees
 from app.errors import RequestError
+from app.horizon import Horizon
 from app.hub import EventDict, EventHub
 from app.manager import RunManager
 from app.settings import Settings
@@ -63,6 +64,7 @@ class Dashboard:
             self.models,
             max_running=settings.max_benchmarks,
         )
+        self.horizon = Horizon(self.benches)  # the horizon curves of the store's benchmarks
         self.training = TrainingService(
             self.store, settings.database_url, self.domains, self.models
         )

@@ -27,7 +27,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar, Protocol
 
 from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
@@ -50,12 +50,43 @@ from planner.search.tree import Node
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
 
-if TYPE_CHECKING:
-    from planner.api import RunConfig
-
 log = logging.getLogger(__name__)
 
 ORDERS = ("auto", "plan", "model")  # how a tree search orders each stream plan's streams
+
+
+class PlannerConfig(Protocol):
+    """What a planner reads of its run's config (:class:`planner.api.RunConfig` is one)."""
+
+    @property
+    def order(self) -> str:
+        """One of :data:`ORDERS`."""
+        ...
+
+    @property
+    def model(self) -> str | None:
+        """The model file; None: the domain's own, else priors."""
+        ...
+
+    @property
+    def priors_db(self) -> str | None:
+        """The store whose recorded queries give the priors when there is no model."""
+        ...
+
+    @property
+    def c_explore(self) -> float | None:
+        """A learned planner's UCT exploration weight; None: its parts' own."""
+        ...
+
+    @property
+    def attempts(self) -> int:
+        """Sequential only: queries of one stream before a restart."""
+        ...
+
+    @property
+    def restarts(self) -> int:
+        """Sequential only: restarts of one skeleton before the next."""
+        ...
 
 
 @dataclass
@@ -120,7 +151,7 @@ class Planner(ABC):
     name: ClassVar[str]
     uses_model: ClassVar[bool] = False  # loads a cost model (to search with or to order by)
 
-    def __init__(self, config: RunConfig) -> None:
+    def __init__(self, config: PlannerConfig) -> None:
         self.config = config
 
     def prepare(self, task: PlanningTask) -> PlanningTask:
@@ -133,7 +164,7 @@ class Planner(ABC):
 # --- models ------------------------------------------------------------------------------------
 
 
-def load_predictor(config: RunConfig, loaded: LoadedDomain) -> Predictor:
+def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
     """The cost model of a run: ``config.model``, else the domain's shipped model, else per-stream
     priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning."""
     path = config.model or loaded.spec.model
@@ -209,7 +240,7 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
 class _TreeSearchPlanner(Planner):
     """A tree search over stream bindings; subclasses give the policy."""
 
-    def __init__(self, config: RunConfig) -> None:
+    def __init__(self, config: PlannerConfig) -> None:
         super().__init__(config)
         self.predictor: Predictor | None = None
 
@@ -287,7 +318,7 @@ class LearnedPlanner(_TreeSearchPlanner):
     name = "learned"
     uses_model = True
 
-    def __init__(self, config: RunConfig, parts: LearnedConfig | None = None) -> None:
+    def __init__(self, config: PlannerConfig, parts: LearnedConfig | None = None) -> None:
         super().__init__(config)
         parts = parts if parts is not None else LearnedConfig()
         if config.c_explore is not None:
@@ -497,7 +528,7 @@ class PlannerSpec:
             return "model" if self.parts.model_order else "plan"
         return "plan"
 
-    def __call__(self, config: RunConfig) -> Planner:
+    def __call__(self, config: PlannerConfig) -> Planner:
         if self.kind is LearnedPlanner:
             return LearnedPlanner(config, self.parts)
         return self.kind(config)

@@ -86,7 +86,7 @@ def horizon(
     Done benchmarks, and running ones with the seeds every planner finished; newest first.
     The parameters pick the series with those settings."""
     try:
-        return dash.benches.horizon.series(
+        return dash.horizon.series(
             domain=domain,
             planners=planners,
             trials=trials,

@@ -1,5 +1,7 @@
-"""The public domain interface: :class:`DomainSpec` (what a domain's module exports) and
-:class:`LoadedDomain` (a spec with its parsed PDDL, as every generic layer uses it).
+"""The public domain interface: :class:`DomainSpec` (what a domain's module exports),
+:class:`LoadedDomain` (a spec with its parsed PDDL, as every generic layer uses it) and the types
+of the hooks, :class:`StateFeatures` among them (the learned models' features of the state;
+``planner.learning.features`` re-exports it).
 
 docs/domains.md walks through writing one; ``examples/tabletop2d/`` is a complete example.
 """
@@ -10,7 +12,7 @@ import random
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from planner.abstract.skeleton import GroundAction
 from planner.pddl.parser import load_problem
@@ -20,8 +22,10 @@ from planner.streams.adapters import StreamAdapter
 from planner.streams.runtime import StreamRuntime, bind_streams
 from planner.values import JSON, ValueCodec, ValueType
 
-if TYPE_CHECKING:
-    from planner.learning.features import StateFeatures
+if TYPE_CHECKING:  # numpy only in annotations: the domain interface loads without it
+    import numpy as np
+    import numpy.typing as npt
+
     from planner.view import DomainView
 
 ProblemBuilder = Callable[[Scene, Domain, int], Problem]  # scene, parsed domain, seed
@@ -43,6 +47,80 @@ class PlanCheck:
 
 # The bound plan's actions, the values of its objects (optimistic ones bound), the problem.
 PlanValidator = Callable[[Sequence[GroundAction], Mapping[str, Any], Problem], PlanCheck]
+
+
+# --- the feature hook: what planner.learning.features asks of a domain ----------------------------
+
+Context = Mapping[str, Any]  # {"facts": [[pred, *args], ...], "values": {name: JSON}, ...}
+
+
+class QueryLike(Protocol):
+    """What fitting reads of a recorded query (:class:`planner.store.QueryRecord` is one)."""
+
+    @property
+    def stream(self) -> str: ...
+
+    @property
+    def inputs(self) -> list[Any]: ...
+
+    @property
+    def context(self) -> dict[str, Any]: ...
+
+
+class StateEncoder(Protocol):
+    """A fitted encoding of the state (and of anything else per stream): saved in the model."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON data, with ``"kind"`` (the :class:`StateFeatures` that reloads it)."""
+        ...
+
+    @property
+    def scene_width(self) -> int:
+        """Numbers of the state part (the same for every stream)."""
+        ...
+
+    def stream_width(self, stream: str) -> int:
+        """Numbers of the stream part after the input slots (0 for most streams)."""
+        ...
+
+    def stream_features(
+        self, stream: str, inputs: Sequence[JSON | None], context: Context
+    ) -> Sequence[float]:
+        """The stream part of a row (``stream_width`` numbers)."""
+        ...
+
+    def scene_features(self, context: Context, out: npt.NDArray[np.float32], offset: int) -> None:
+        """Write the state part into ``out[offset : offset + scene_width]`` (zeroed before)."""
+        ...
+
+    def feature_names(self, stream: str) -> tuple[list[str], list[str]]:
+        """Column names of the stream part and of the state part."""
+        ...
+
+    def finish_row(
+        self,
+        stream: str,
+        inputs: Sequence[JSON | None],
+        row: npt.NDArray[np.float32],
+        slots: Sequence[tuple[str, int, int]],
+    ) -> None:
+        """Adjust a finished row in place (``slots``: kind, offset and width of each input
+        slot); most encoders do nothing here."""
+        ...
+
+
+class StateFeatures(Protocol):
+    """A domain's feature hook: fits a :class:`StateEncoder` on recorded queries and reloads one
+    from a model file."""
+
+    @property
+    def kind(self) -> str:
+        """The name saved in model files (``"facts"``, ``"kitchen"``)."""
+        ...
+
+    def fit(self, records: Sequence[QueryLike], codec: ValueCodec) -> StateEncoder: ...
+
+    def load(self, data: Mapping[str, Any], codec: ValueCodec) -> StateEncoder: ...
 
 
 @dataclass(frozen=True)

@@ -25,16 +25,20 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from planner.abstract.instantiate import OPTIMISTIC_PREFIX
+from planner.domains.spec import (
+    Context,
+    LoadedDomain,
+    QueryLike,
+    StateEncoder,
+    StateFeatures,
+)
 from planner.values import JSON, OPAQUE, FeatureError, ValueCodec
-
-if TYPE_CHECKING:
-    from planner.domains.spec import LoadedDomain
 
 __all__ = [
     "FEATURE_VERSION",
@@ -54,23 +58,6 @@ MAX_SEEN_FACTS = 100_000  # facts whose encoding a FactEncoder remembers (cleare
 MAX_SEEN_CONTEXTS = 4096  # contexts whose state part a Featurizer remembers (cleared beyond)
 
 FloatArray = npt.NDArray[np.float32]
-Context = Mapping[str, Any]  # {"facts": [[pred, *args], ...], "values": {name: JSON}, ...}
-
-
-class QueryLike(Protocol):
-    """What fitting reads of a recorded query (:class:`planner.store.QueryRecord` is one)."""
-
-    @property
-    def stream(self) -> str: ...
-
-    @property
-    def inputs(self) -> list[Any]: ...
-
-    @property
-    def context(self) -> dict[str, Any]: ...
-
-
-# --- the state hook ----------------------------------------------------------------------------
 
 
 def _makeup(context: Context) -> tuple[Any, ...]:
@@ -85,62 +72,6 @@ def _makeup(context: Context) -> tuple[Any, ...]:
         tuple(values),
         tuple(map(id, values.values())),
     )
-
-
-class StateEncoder(Protocol):
-    """A fitted encoding of the state (and of anything else per stream): saved in the model."""
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain JSON data, with ``"kind"`` (the :class:`StateFeatures` that reloads it)."""
-        ...
-
-    @property
-    def scene_width(self) -> int:
-        """Numbers of the state part (the same for every stream)."""
-        ...
-
-    def stream_width(self, stream: str) -> int:
-        """Numbers of the stream part after the input slots (0 for most streams)."""
-        ...
-
-    def stream_features(
-        self, stream: str, inputs: Sequence[JSON | None], context: Context
-    ) -> Sequence[float]:
-        """The stream part of a row (``stream_width`` numbers)."""
-        ...
-
-    def scene_features(self, context: Context, out: FloatArray, offset: int) -> None:
-        """Write the state part into ``out[offset : offset + scene_width]`` (zeroed before)."""
-        ...
-
-    def feature_names(self, stream: str) -> tuple[list[str], list[str]]:
-        """Column names of the stream part and of the state part."""
-        ...
-
-    def finish_row(
-        self,
-        stream: str,
-        inputs: Sequence[JSON | None],
-        row: FloatArray,
-        slots: Sequence[tuple[str, int, int]],
-    ) -> None:
-        """Adjust a finished row in place (``slots``: kind, offset and width of each input
-        slot); most encoders do nothing here."""
-        ...
-
-
-class StateFeatures(Protocol):
-    """A domain's feature hook: fits a :class:`StateEncoder` on recorded queries and reloads one
-    from a model file."""
-
-    @property
-    def kind(self) -> str:
-        """The name saved in model files (``"facts"``, ``"kitchen"``)."""
-        ...
-
-    def fit(self, records: Sequence[QueryLike], codec: ValueCodec) -> StateEncoder: ...
-
-    def load(self, data: Mapping[str, Any], codec: ValueCodec) -> StateEncoder: ...
 
 
 # --- the generic state encoding -----------------------------------------------------------------

@@ -4,7 +4,7 @@ The solvers in ``pr2_ikfast.ikLeft`` / ``pr2_ikfast.ikRight`` are
 
 - ``get_ik(rotation, position, [torso, upper_arm_roll])``: ``rotation`` is the tool frame's 3x3
   rotation as a list of rows, ``position`` its origin; both in **base_link**, which sits
-  :data:`~planner.sim.pr2_model.BASE_LINK_HEIGHT` above ``base_footprint``. The torso lift and
+  :data:`~planner.sim.pr2_dimensions.BASE_LINK_HEIGHT` above ``base_footprint``. The torso lift and
   the upper arm roll are the two free parameters. Returns ``None`` or up to 8 lists
   ``[torso, 7 arm joints]``; joint limits are not checked and continuous joints are not wrapped.
 - ``get_fk([torso, 7 arm joints])``: ``[position, rotation rows]`` of the tool frame
@@ -23,10 +23,10 @@ from typing import Any
 
 from pr2_ikfast import ikLeft, ikRight
 
+from planner.sim.pr2_dimensions import BASE_LINK_HEIGHT
 from planner.sim.pr2_model import (
     ARM_JOINTS,
     ARMS,
-    BASE_LINK_HEIGHT,
     CONTINUOUS_JOINTS,
     JOINT_LIMITS,
     TORSO_JOINT,

@@ -1,13 +1,13 @@
 """A generated PR2 model whose arm kinematics match the ``pr2-ikfast`` solver.
 
 No PR2 URDF with meshes can be installed here, so the project builds its own from the robot's
-published dimensions (the public ``pr2_description`` kinematics) and joint limits. Each link's
-collision geometry is a few boxes, cylinders and spheres (what the planner checks); what is drawn
-is a set of meshes shaped and coloured like the PR2 (:mod:`planner.sim.pr2_visuals`,
-``scenes/pr2_meshes/``). The kinematic chain (``base_footprint`` -> ``base_link`` -> torso ->
-shoulder -> ... -> ``{l,r}_gripper_tool_frame``) uses the same joint origins as the IKFast solver,
-so forward kinematics in pybullet and ``pr2_ikfast`` agree (checked by
-``tests/sim/test_pr2_model.py``).
+published dimensions (the public ``pr2_description`` kinematics, in
+:mod:`planner.sim.pr2_dimensions`) and joint limits. Each link's collision geometry is a few boxes,
+cylinders and spheres (what the planner checks); what is drawn is a set of meshes shaped and
+coloured like the PR2 (:mod:`planner.sim.pr2_visuals`, ``scenes/pr2_meshes/``). The kinematic chain
+(``base_footprint`` -> ``base_link`` -> torso -> shoulder -> ... -> ``{l,r}_gripper_tool_frame``)
+uses the same joint origins as the IKFast solver, so forward kinematics in pybullet and
+``pr2_ikfast`` agree (checked by ``tests/sim/test_pr2_model.py``).
 
 The base moves in the plane by setting the pose of ``base_footprint`` in the simulator; the URDF
 has no planar joints.
@@ -28,12 +28,31 @@ from pathlib import Path
 from typing import Literal
 from xml.sax.saxutils import quoteattr
 
+# What the meshes are built from too; still importable from here.
+from planner.sim.pr2_dimensions import (
+    BASE_LINK,
+    BASE_LINK_HEIGHT,
+    BASE_SIZE,
+    FINGER_LENGTH,
+    FINGER_ORIGIN_X,
+    FOREARM_LENGTH,
+    HEAD_PAN_ORIGIN,
+    HEAD_TILT_ORIGIN,
+    MATERIALS,
+    REPO_ROOT,
+    ROOT_LINK,
+    SHOULDER_LIFT_X,
+    SHOULDER_Y,
+    TOOL_LENGTH,
+    TORSO_LINK,
+    TORSO_ORIGIN,
+    UPPER_ARM_LENGTH,
+    Vec3,
+)
+
 logger = logging.getLogger(__name__)
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
 URDF_PATH = REPO_ROOT / "scenes" / "pr2.urdf"
-
-Vec3 = tuple[float, float, float]
 
 # ---------------------------------------------------------------------------------------------
 # Names
@@ -42,9 +61,6 @@ Vec3 = tuple[float, float, float]
 ARMS: tuple[str, ...] = ("left", "right")
 _PREFIX = {"left": "l", "right": "r"}
 
-ROOT_LINK = "base_footprint"  # the body's base; its pose is the robot's planar pose
-BASE_LINK = "base_link"
-TORSO_LINK = "torso_lift_link"
 TORSO_JOINT = "torso_lift_joint"
 HEAD_JOINTS: tuple[str, ...] = ("head_pan_joint", "head_tilt_joint")
 
@@ -87,24 +103,6 @@ ARM_LINKS: dict[str, tuple[str, ...]] = {
 CONTINUOUS_JOINTS: frozenset[str] = frozenset(
     f"{p}_{s}" for p in _PREFIX.values() for s in ("forearm_roll_joint", "wrist_roll_joint")
 )
-
-# ---------------------------------------------------------------------------------------------
-# Dimensions (metres), from the public pr2_description kinematics; the arm chain is exactly the
-# one compiled into pr2_ikfast, whose frame is base_link (BASE_LINK_HEIGHT above base_footprint).
-# ---------------------------------------------------------------------------------------------
-
-BASE_LINK_HEIGHT = 0.051  # base_footprint -> base_link
-TORSO_ORIGIN: Vec3 = (-0.05, 0.0, 0.739675)  # base_link -> torso_lift_link at zero lift
-SHOULDER_Y = 0.188  # torso_lift_link -> {l,r}_shoulder_pan_link (+y left, -y right)
-SHOULDER_LIFT_X = 0.1  # shoulder pan axis -> shoulder lift axis
-UPPER_ARM_LENGTH = 0.4  # upper arm roll -> elbow flex
-FOREARM_LENGTH = 0.321  # forearm roll -> wrist flex
-TOOL_LENGTH = 0.18  # wrist roll / palm -> tool frame between the fingertips
-HEAD_PAN_ORIGIN: Vec3 = (-0.01707, 0.0, 0.38145)  # torso_lift_link -> head_pan_link
-HEAD_TILT_ORIGIN: Vec3 = (0.068, 0.0, 0.0)  # head_pan_link -> head_tilt_link
-BASE_SIZE: Vec3 = (0.668, 0.668, 0.30)  # the square base box
-FINGER_ORIGIN_X = 0.13  # palm -> finger joints
-FINGER_LENGTH = 0.08  # fingers reach 3 cm past the tool frame
 
 # ---------------------------------------------------------------------------------------------
 # Limits: position (rad or m) and velocity (rad/s or m/s), as on the real robot.
@@ -183,14 +181,6 @@ REST_ARM_CONF: dict[str, tuple[float, ...]] = {
 
 ShapeKind = Literal["box", "cylinder", "sphere"]
 JointKind = Literal["fixed", "revolute", "continuous", "prismatic"]
-
-MATERIALS: dict[str, tuple[float, float, float, float]] = {
-    "white": (0.92, 0.92, 0.9, 1.0),
-    "light_grey": (0.72, 0.72, 0.72, 1.0),
-    "grey": (0.5, 0.5, 0.52, 1.0),
-    "dark_grey": (0.25, 0.25, 0.27, 1.0),
-    "black": (0.07, 0.07, 0.07, 1.0),
-}
 
 
 @dataclass(frozen=True)
@@ -509,7 +499,7 @@ def _joint_xml(joint: Joint) -> list[str]:
 def generate_pr2_urdf() -> str:
     """The URDF text of :func:`pr2_model`, drawn with the meshes of
     :mod:`planner.sim.pr2_visuals`; deterministic, so the committed file can be checked."""
-    from planner.sim.pr2_visuals import link_visuals  # it reads this module's dimensions
+    from planner.sim.pr2_visuals import link_visuals  # trimesh: only the generator needs it
 
     model = pr2_model()
     lines = [

@@ -28,7 +28,7 @@ from collections.abc import Callable
 import trimesh
 
 from planner.sim import meshes as m
-from planner.sim.pr2_model import (
+from planner.sim.pr2_dimensions import (
     BASE_LINK,
     BASE_LINK_HEIGHT,
     BASE_SIZE,

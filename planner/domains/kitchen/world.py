@@ -11,11 +11,11 @@ from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_p
 from planner.domains.kitchen.values import Conf, Grasp
 from planner.sim import bodies
 from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
+from planner.sim.pr2_dimensions import BASE_LINK
 from planner.sim.pr2_model import (
     ARM_JOINTS,
     ARM_LINKS,
     ARMS,
-    BASE_LINK,
     REST_ARM_CONF,
     TOOL_LINK,
     TORSO_JOINT,

@@ -34,7 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from planner.domains.panda.geometry import grid_slots
-from planner.learning.features import QueryLike
+from planner.domains.spec import QueryLike
 from planner.values import JSON, FeatureError, ValueCodec
 
 KIND = "panda"  # the name model files give these features
