@@ -503,8 +503,10 @@ class _SequentialRecorder:
 
 
 def _trajectories(bound: BoundPlan) -> list[Any]:
+    """The plan's values that take time to execute: those with ``seconds``, as the stream
+    runtime counts a query's execution seconds (planner.streams.runtime)."""
     used = {a for act in bound.skeleton.actions for a in act.args}
-    return [v for k, v in bound.values.items() if k in used and hasattr(v, "segments")]
+    return [v for k, v in bound.values.items() if k in used and hasattr(v, "seconds")]
 
 
 # --- the registry ------------------------------------------------------------------------------

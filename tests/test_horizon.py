@@ -74,3 +74,18 @@ def test_the_command_resumes_and_draws(tmp_path: Path, capsys: pytest.CaptureFix
     assert main([*args, "--no-run"]) == 0
     assert main([*args, "--out", str(tmp_path / "h.png")]) == 2  # not a figure format
     assert "expected a .html or .svg file" in capsys.readouterr().err
+
+
+def test_every_planner_counts_the_plan_s_execution_seconds() -> None:
+    """The sequential binder counts the tutorial's paths as the tree searches do (it counted
+    only values with the kitchen's trajectory segments, so elsewhere its total was planning)."""
+    from planner.api import RunConfig, solve
+
+    totals = {}
+    for planner in ("baseline", "sequential"):
+        out = solve(RunConfig(scene=SCENES[1], seed=0, planner=planner, budget_s=20))
+        assert out.status == "solved"
+        paths = [v for a in out.actions if a.name == "move" for v in [out.values[a.args[-1]]]]
+        assert out.execution_s == pytest.approx(sum(p.seconds for p in paths)) and paths
+        totals[planner] = out.execution_s
+    assert all(s > 0 for s in totals.values())
