@@ -65,6 +65,10 @@ class HorizonPoint(BaseModel):
     improvement: tuple[float, float, float] | None = Field(
         description="1 - mean total / the first planner's over the same seeds (None for it)"
     )
+    zero_planning_bound: tuple[float, float, float] | None = Field(
+        description="1 - mean execution / the first planner's mean total over the seeds both "
+        "solved: what this planner would save planning in no time (None for the first)"
+    )
 
 
 class HorizonBench(BaseModel):
