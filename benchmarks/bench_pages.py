@@ -1,4 +1,4 @@
-"""Benchmark: the researcher's pages of the dashboard (issue 30), in headless Chromium.
+"""Benchmark: the researcher's pages of the dashboard, in headless Chromium.
 
 Records into a temporary store two synthetic 20,000-node runs (page_render.py's plausible
 learned-planner kitchen run, two seeds) and a finished benchmark of two planners over
@@ -37,6 +37,7 @@ import urllib.request
 from pathlib import Path
 from typing import Any
 
+from _common import parse_seeds
 from page_render import Synth, start_server
 from playwright.sync_api import Page, sync_playwright
 
@@ -234,11 +235,6 @@ def slowdown(
     return rows
 
 
-def _seeds(text: str) -> list[int]:
-    lo, _, hi = text.partition("-")
-    return list(range(int(lo), int(hi or lo) + 1))
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--nodes", type=int, default=20_000, help="nodes of each compared tree")
@@ -286,7 +282,9 @@ def main() -> int:
                 hashes = [f"#compare={a},{b}", f"#bench={bench_id}"]
                 modes = [float(r) for r in args.reload.split(",")] if args.runs else []
                 rows = {
-                    reload: slowdown(context, url, hashes, args.scene, _seeds(args.runs), reload)
+                    reload: slowdown(
+                        context, url, hashes, args.scene, parse_seeds(args.runs), reload
+                    )
                     for reload in modes
                 }
                 version = context.browser.version if context.browser else "?"

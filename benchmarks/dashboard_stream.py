@@ -21,6 +21,7 @@ from typing import Any
 
 import httpx
 import uvicorn
+from _common import parse_seeds
 from websockets.sync.client import connect
 
 from app.main import create_app
@@ -194,11 +195,6 @@ def _drain(server: Server, run_id: str) -> None:
                 return
 
 
-def _seeds(text: str) -> list[int]:
-    lo, _, hi = text.partition("-")
-    return list(range(int(lo), int(hi or lo) + 1))
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--events", type=int, default=20_000)
@@ -210,7 +206,7 @@ def main() -> None:
         server = Server(Path(tmp) / "runs.db")
         try:
             d = delivery(server, args.events)
-            rows = slowdown(server, args.scene, _seeds(args.seeds), args.budget)
+            rows = slowdown(server, args.scene, parse_seeds(args.seeds), args.budget)
         finally:
             server.close()
         RunStore(Path(tmp) / "runs.db").close()

@@ -28,6 +28,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from _common import parse_seeds
+
 from planner.abstract import AbstractConfig, AbstractPlan, plan_abstract
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.domains.kitchen import GEOMETRY_KEY
@@ -70,18 +72,6 @@ class Record:
 
 def progress(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
-
-
-def parse_seeds(text: str) -> list[int]:
-    """``0-9`` or ``0,3,5`` or a mix (``0-4,9``)."""
-    seeds: list[int] = []
-    for part in text.split(","):
-        if "-" in part:
-            lo, hi = part.split("-", 1)
-            seeds.extend(range(int(lo), int(hi) + 1))
-        elif part:
-            seeds.append(int(part))
-    return seeds
 
 
 def percentile(xs: list[float], q: float) -> float:

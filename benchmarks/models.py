@@ -19,17 +19,11 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from _common import parse_seeds
 
 from planner.experiment import Trial, TrialResult, run_trials, stderr_progress
 from planner.report import paired_improvement
 from planner.scene import SceneError, load_scene
-
-
-def _parse_seeds(text: str) -> list[int]:
-    if "-" in text:
-        lo, hi = (int(x) for x in text.split("-", 1))
-        return list(range(lo, hi + 1))
-    return [int(x) for x in text.split(",")]
 
 
 def _times(r: TrialResult, budget: float) -> tuple[float, float, float]:
@@ -58,7 +52,7 @@ def main() -> int:
         if not Path(m).is_file():
             parser.error(f"--models: no such file: {m}")
     try:
-        seeds = _parse_seeds(args.seeds)
+        seeds = parse_seeds(args.seeds)
     except ValueError:
         parser.error("--seeds takes LO-HI or a,b,c (integers)")
     if not seeds or args.workers < 1 or args.budget <= 0:

@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from base_choice import _parse_seeds
+from _common import parse_seeds
 
 from planner.domains.kitchen.samplers import SamplerConfig
 from planner.runs import PLANNERS, RunConfig, run
@@ -100,7 +100,7 @@ def _trial(recorder: _Recorder, scene: str, seed: int, planner: str, budget: flo
 
 def _worker(args: argparse.Namespace) -> int:
     """One trial in this process (whichever planner package PYTHONPATH gives), as JSON."""
-    trial = _trial(_recorder(), args.scene, _parse_seeds(args.seeds)[0], args.planner, args.budget)
+    trial = _trial(_recorder(), args.scene, parse_seeds(args.seeds)[0], args.planner, args.budget)
     out = {
         "seed": trial.seed,
         "solved": trial.solved,
@@ -215,7 +215,7 @@ def main() -> int:
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     try:
-        seeds, limits = _parse_seeds(args.seeds), _parse_seeds(args.limits)
+        seeds, limits = parse_seeds(args.seeds), parse_seeds(args.limits)
     except ValueError:
         parser.error("--seeds and --limits take LO-HI or a,b,c (integers)")
     if args.worker:

@@ -1,4 +1,4 @@
-"""Benchmark: the run store on SQLite against PostgreSQL (issue 31).
+"""Benchmark: the run store on SQLite against PostgreSQL.
 
 1. Events per second through ``StoreSink`` (default batch size, 200) into a new SQLite file
    (WAL) and into a new PostgreSQL database on a server started for the purpose (tests/postgres.py:
@@ -34,6 +34,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
+from _common import parse_seeds  # noqa: E402
 from store_throughput import measure_into, synthetic_events  # noqa: E402
 
 from planner.events import ListSink  # noqa: E402
@@ -87,11 +88,6 @@ def _plan_in_process(args: tuple[str, int, str, float, str, str]) -> Planned:
     return _plan(*args)
 
 
-def _seeds(text: str) -> list[int]:
-    lo, _, hi = text.partition("-")
-    return list(range(int(lo), int(hi or lo) + 1))
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--events", type=int, default=50_000)
@@ -123,7 +119,7 @@ def main() -> int:
                 log.info("events, repeat %d, %s: %.2f s", repeat + 1, backend, seconds)
 
         ctx = multiprocessing.get_context("spawn")
-        for i, seed in enumerate(_seeds(args.seeds)):
+        for i, seed in enumerate(parse_seeds(args.seeds)):
             order = BACKENDS if i % 2 == 0 else BACKENDS[::-1]
             for backend in order:
                 db = (

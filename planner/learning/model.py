@@ -44,7 +44,7 @@ COST_HEADS = ("r_s", "r_f", "r_m")
 # Predictions run on one torch thread: a search's batches are tens to hundreds of rows through
 # 64-unit layers, too small to gain from intra-op threads, and on a machine whose cores are all
 # busy (a benchmark's workers, the dashboard) those threads wait on each other (docs/BENCHMARKS.md,
-# the search's seconds per node).
+# *Seconds per node as the tree grows*).
 INFERENCE_THREADS = 1
 
 Float64Array = npt.NDArray[np.float64]

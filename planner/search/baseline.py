@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class BaselineConfig:
-    """Constants of eTAMP's PW-UCT (source: the public eTAMP code, as issue 4 records)."""
+    """Constants of eTAMP's PW-UCT (source: the public eTAMP code)."""
 
     c_node: float = 0.1  # exploration weight inside a plan: value + c * sqrt(ln N / n)
     widen_k: float = 13.5  # query again when visits > widen_k * children^2 (alpha = 0.5)

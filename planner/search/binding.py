@@ -2,8 +2,8 @@
 
 :func:`bind_sequentially` is the simplest binder: query the streams of one stream plan in order,
 retrying a failed stream a few times and restarting from the first stream when it keeps failing.
-It is what a test or a user uses to check a domain's samplers end to end; the tree search of
-issue 4 decides which stream to query next instead.
+It is what a test or a user uses to check a domain's samplers end to end; the tree search
+(``mcts.py``) decides which stream to query next instead.
 """
 
 from __future__ import annotations

@@ -122,7 +122,7 @@ class Predictor(Protocol):
 class LearnedConfig:
     """The learned planner's parts. All off (:meth:`paper`) is the paper's planner; the
     defaults are the planner ``learned``. Each field's docstring: what it does, why, what it
-    measured (docs/BENCHMARKS.md, *The learned search's parts*)."""
+    measured (docs/BENCHMARKS.md, *Planners compared*)."""
 
     c_explore: float = 0.05
     """UCT exploration weight on values normalised to (0, 1] by the best plan's Q."""
@@ -166,7 +166,9 @@ class LearnedConfig:
     part of the policy but the stream's own word: on for every tree search, the baseline's and
     the paper's too; off queries such a node again and again (each query a failure).
 
-    Measured (off against on, paired, docs/BENCHMARKS.md): see *Exhausted streams*."""
+    Measured (off against on, paired, docs/BENCHMARKS.md, *Published PDDLStream examples*): on
+    pickplace-4 (e6d5278, 8 seeds) off asked 982 IK queries to on's 281, 821 of them failures,
+    at no measurable cost in time."""
 
     @classmethod
     def paper(cls) -> LearnedConfig:

@@ -176,8 +176,8 @@ def shorten(si: ob.SpaceInformation, path: og.PathGeometric, steps: int) -> og.P
     coordinate at a time), and a second greedy pass. The work is counted in steps, not seconds,
     so the result does not depend on the machine's load; OMPL's ``simplifySolution(t)``
     overran its time limit several-fold with a Python validity checker, and its result varied
-    with how far it got. On the kitchen's base moves the two give paths of the same length
-    at about half the time (``benchmarks/shortcut.py``).
+    with how far it got. On the kitchen's base moves, paired on the same RRT paths when this
+    replaced it (380776e), it gave paths 2% shorter in two thirds of the time.
     """
     path = _greedy_shortcut(si, path)
     if steps:

@@ -1,5 +1,5 @@
 """Bad input found on published PDDLStream domains: each error names file, line, column and
-what was expected (issue 27)."""
+what was expected."""
 
 from __future__ import annotations
 

@@ -45,7 +45,7 @@ def _old_store(name: str, tmp_path: Path, request: pytest.FixtureRequest) -> str
     "name",
     [
         "store-42795af.db",  # before failure reasons and run owners (2026-11)
-        "store-e0af99b.db",  # before benchmark owners (issue 30)
+        "store-e0af99b.db",  # before benchmark owners
         "store-e0af99b.pg.sql",  # the same code's store on PostgreSQL
         "store-f9a0383.db",  # benchmark owners: the last schema before schema versions
     ],

@@ -115,7 +115,7 @@ def test_a_sampler_may_say_why_it_found_nothing(line: LoadedDomain) -> None:
     assert odd.reason == "42" and not odd.success
 
 
-# --- the stream file's other declarations (issue 27) ------------------------------------------
+# --- the stream file's other declarations -----------------------------------------------------
 
 
 def test_a_lazy_predicate_succeeds_when_its_test_says_false() -> None:

@@ -55,9 +55,9 @@ class SamplerConfig:
     corner_fraction: float = 0.75  # placement tries on the packing grid, the rest uniform
     corner_jitter: float = 0.01  # metres a packed block may sit in from its grid slot
     # Collision-free base poses drawn per IK query, tried nearest first: the more drawn, the
-    # nearer the first that works. 96 rather than 12 cuts execution by a tenth to a fifth
-    # (base_choice.py --field ik_attempts; docs/BENCHMARKS.md, *How many base poses IK draws*)
-    # for four times the seconds per IK query. At 12 until 2af562f: before it, the learned
+    # nearer the first that works. 96 rather than 12 cut execution by a tenth to a fifth for
+    # four times the seconds per IK query (kitchen-4 and kitchen-8, paired, at 2af562f: the
+    # figures are in commit beb6d47). At 12 until 2af562f: before it, the learned
     # planner timed out on kitchen-4 seed 1009 with 96, re-sampling the placement before a full
     # stove instead of the ones that had filled it.
     ik_attempts: int = 96
@@ -67,15 +67,15 @@ class SamplerConfig:
     # seconds, "drawn" as drawn.
     base_order: str = "around"
     # Metres the "around" routes keep from a fixture's footprint: the base at rest clears one
-    # at 0.36 square to it and 0.50 turned 45 degrees (with the clearance; base_extent.py).
+    # at 0.36 square to it and 0.50 turned 45 degrees (with the clearance; measured at 1110744).
     route_radius: float = 0.42
     reach: tuple[float, float] = (0.45, 0.85)  # base-to-block distance range, metres
     approach: float = 0.10  # pre-grasp distance along the tool's x axis, metres
     motion: MotionConfig = field(default_factory=MotionConfig)  # OMPL for the base
     # OMPL for the arm: ~2 cm at the gripper between checks. 10 partial shortcuts, not the
     # base's 100: each further shortcut of an arm path cost more planning than it saved
-    # execution (benchmarks/arm_shortcut.py: 100 steps took 1.4 s more per path than 10 to
-    # save 0.34 s of motion; whole baseline runs 25% faster in total). 100 iterations of an
+    # execution (measured when b66f9cb made it 10: 100 steps took 1.4 s more per path than 10
+    # to save 0.34 s of motion; whole baseline runs 25% faster in total). 100 iterations of an
     # arm search take about 0.17 s on an idle machine (benchmarks/motion_iterations.py).
     arm_motion: MotionConfig = field(
         default_factory=lambda: MotionConfig(resolution=0.002, shortcut_steps=10, iterations=100)

@@ -1,4 +1,4 @@
-"""runs.owner and an index on runs.created_at (issue 28).
+"""runs.owner and an index on runs.created_at.
 
 The owner is the process running a live run; the index lists runs newest first.
 

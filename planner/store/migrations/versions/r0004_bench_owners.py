@@ -1,4 +1,4 @@
-"""benchmarks.owner: the process running a benchmark (issue 30).
+"""benchmarks.owner: the process running a benchmark.
 
 Revision ID: 0004
 Revises: 0003

@@ -1,17 +1,16 @@
-"""Benchmark: which choice of IK's base poses shortens execution?
+"""Benchmark: the kitchen's sampler settings compared, paired on the same seeds.
 
-    .venv/bin/python benchmarks/base_choice.py --scene kitchen-4 --seeds 2000-2009 \
-        --planner baseline --budget 300 --workers 2 --settings straight,around
-    .venv/bin/python benchmarks/base_choice.py --field ik_attempts --settings 12,48
+    .venv/bin/python benchmarks/sampler_settings.py --scene kitchen-4 --seeds 2000-2011 \
+        --planner baseline --budget 300 --workers 2 --field ik_attempts --settings 12,96
 
-Runs the same seeds with each value of ``--settings`` for the ``SamplerConfig`` field
-``--field`` (default ``base_order``: "drawn", IK tries its base poses in the order drawn;
-"straight", in order of straight-line travel time from where the robot stands; "around", in
-order of the route round the fixtures; ``ik_attempts``: how many base poses IK draws), the
-settings' order rotating from seed to seed so that machine noise hits them alike. Prints, per
-setting, solved trials and the mean planning, execution, total, base travel, arm and
-straight-line-bound seconds and query and motion-query counts over the seeds every setting
-solved, and the paired ratios against the first setting with bootstrap 95% intervals.
+Runs the same seeds with each value of ``--settings`` for one field of the kitchen's
+``SamplerConfig`` (``--field``, any number or text field: ``ik_attempts``, ``placement_attempts``,
+``base_order``, ...; default ``base_order`` with "straight,around"), set through
+``planner.domains.kitchen.with_samplers``, a fresh process per trial, the settings' order
+rotating from seed to seed so that machine noise hits them alike. Prints, per setting, solved
+trials and the mean planning, execution, total, base travel, arm and straight-line-bound seconds
+and query and motion-query counts over the seeds every setting solved, and the paired ratios
+against the first setting with bootstrap 95% intervals.
 """
 
 from __future__ import annotations
@@ -26,16 +25,11 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
+from _common import parse_seeds
+
 from planner.runs import PLANNERS, RunConfig
 from planner.sim.pr2_model import BASE_VELOCITY
 from planner.sim.transforms import wrap_angle
-
-
-def _parse_seeds(text: str) -> list[int]:
-    if "-" in text:
-        lo, hi = (int(x) for x in text.split("-", 1))
-        return list(range(lo, hi + 1))
-    return [int(x) for x in text.split(",")]
 
 
 def _breakdown(values: dict[str, Any]) -> tuple[float, float, float]:
@@ -114,7 +108,7 @@ def main() -> int:
     )
     args = parser.parse_args()
     try:
-        seeds = _parse_seeds(args.seeds)
+        seeds = parse_seeds(args.seeds)
     except ValueError:
         parser.error("--seeds takes LO-HI or a,b,c (integers)")
     if not seeds or args.workers < 1 or args.budget <= 0:
