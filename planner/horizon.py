@@ -18,12 +18,13 @@ as SVG (for docs; drawn here, no plotting library needed).
 
 from __future__ import annotations
 
+import hashlib
 import html
 import json
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -87,10 +88,21 @@ def scene_goal(scene: str, domain: str | None = None) -> tuple[str, int]:
 
 
 def _same(config: dict[str, Any], wanted: BenchConfig) -> bool:
+    """A stored benchmark's settings are ``wanted``'s: the same model counts by its content,
+    wherever its file was (a benchmark run from another checkout of the same code)."""
     try:
-        return BenchConfig.from_dict(config) == wanted
+        have = BenchConfig.from_dict(config)
     except (KeyError, TypeError, ValueError):
         return False
+    if have.model is not None and wanted.model is not None and have.model != wanted.model:
+        recorded = config.get("model_sha256")
+        path = Path(wanted.model)
+        if recorded is None or not path.is_file():
+            return False
+        if hashlib.sha256(path.read_bytes()).hexdigest() != recorded:
+            return False
+        have = replace(have, model=wanted.model)
+    return have == wanted
 
 
 def find_bench(db: str | Path, config: BenchConfig) -> tuple[str, str] | None:

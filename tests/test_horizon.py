@@ -89,3 +89,20 @@ def test_every_planner_counts_the_plan_s_execution_seconds() -> None:
         assert out.execution_s == pytest.approx(sum(p.seconds for p in paths)) and paths
         totals[planner] = out.execution_s
     assert all(s > 0 for s in totals.values())
+
+
+def test_a_benchmark_run_from_another_checkout_is_found_by_its_model_s_content(
+    tmp_path: Path,
+) -> None:
+    import hashlib
+
+    from planner.domains.panda import MODEL
+    from planner.horizon import _same
+
+    wanted = make_config("panda-2", ["baseline", "learned"], trials=2, seed_start=1000, budget_s=60)
+    assert wanted.model == str(MODEL)
+    stored = {**wanted.to_dict(), "model": "/elsewhere/planner/domains/panda/model.pt"}
+    stored["model_sha256"] = hashlib.sha256(MODEL.read_bytes()).hexdigest()
+    assert _same(stored, wanted)
+    assert not _same({**stored, "model_sha256": "0" * 64}, wanted)  # another model
+    assert not _same({**stored, "budget_s": 30.0}, wanted)
