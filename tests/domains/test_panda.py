@@ -255,3 +255,16 @@ def test_the_broad_phase_answers_as_every_exact_query_does() -> None:
                 )
                 hits += answer
         assert 0 < hits < 900  # both answers occur
+
+
+@pytest.mark.slow
+def test_blocks_go_onto_a_raised_shelf_as_into_the_tray() -> None:
+    from planner.api import RunConfig, solve
+
+    scene = str(SCENES / "panda-shelf-4.json")
+    out = solve(RunConfig(scene=scene, seed=1001, planner="learned", budget_s=120))
+    assert out.status == "solved" and out.check() == (True, "valid (replayed in pybullet)")
+    places = [a for a in out.actions if a.name == "place" and a.args[2] == "shelf"]
+    assert len(places) == 4
+    for action in places:  # each block stands on the board, 20 cm up
+        assert out.values[action.args[1]].z == pytest.approx(0.2 + 0.02)
