@@ -265,7 +265,14 @@ def _run_ray(
                 # then starve (a 1 s top-k call took 86 s beside a running benchmark), and
                 # they would not be timed like the process pool's trials, which run at 0.
                 os.environ.setdefault("RAY_worker_niceness", "0")
-                ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+                # address="local": a Ray of its own even when another runs on this machine (a
+                # cluster left behind, or RAY_ADDRESS set), which ray.init() would join instead.
+                ray.init(
+                    address="local",
+                    num_cpus=workers,
+                    include_dashboard=False,
+                    log_to_driver=False,
+                )
             else:
                 ray.init(address=address, log_to_driver=False)
         except Exception as exc:  # no trial has started: the benchmark resumes once Ray is up
