@@ -36,8 +36,13 @@ postgres:
 		echo "installing Debian's postgresql for the store tests (apt-get, needs root)" && \
 		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq postgresql; }
 
+# Parallel workers (pytest-xdist), one per core, a test file each at a time (--dist loadfile):
+# a module's fixtures are made once and its tests run in order (the browser tests share one
+# server). On 2 cores beside a 2-worker benchmark, 3 or 4 workers were no faster than 2. The 20
+# slowest tests are listed at the end. TEST_WORKERS=0 runs the suite in one process.
+TEST_WORKERS ?= auto
 pytest: $(STAMP) $(CHROMIUM) postgres
-	$(BIN)/pytest -q
+	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadfile --durations=20
 
 serve: $(STAMP)
 	$(BIN)/tamp serve --domain examples/tabletop2d

@@ -1021,6 +1021,9 @@ window.dashboard = {
   /** Where the benchmark scatter draws seed ``seed`` (client px), or null. */
   scatterPoint: (seed) => benchPage.pointPosition(seed),
   benchMs: () => benchPage.ms,
+  /** What the 3D view was last told (a PUT /api/viewer body, or null) and whether a newer
+   * body waits for the debounce. */
+  viewerSync: () => ({ pending: viewerPending !== "", sent: viewerSent === "" ? null : JSON.parse(viewerSent) }),
   showPicked,
 };
 

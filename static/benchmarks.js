@@ -15,6 +15,10 @@ const CONFIG = { displayModeBar: false, responsive: true };
 const FONT = { family: "system-ui, -apple-system, Segoe UI, sans-serif", size: 12, color: "#1f2937" };
 const SOLVED = "#2563eb";
 const UNSOLVED = "#dc2626";
+const MARKER_PX = 8; // the scatter's marker size
+// Inside a marker plotly finds every point equally close (its distance stops at the marker's
+// edge, plus about a pixel): a point this far from the cursor is under it.
+const UNDER_PX = MARKER_PX / 2 + 1;
 
 const $ = (id) => document.getElementById(id);
 
@@ -284,7 +288,7 @@ export class BenchPage {
         <label>Seconds <select data-testid="scatter-measure" data-plot="measure">${MEASURES.map((m) => `<option ${m === this.plot.measure ? "selected" : ""}>${m}</option>`).join("")}</select></label>
         <label>x axis <select data-testid="scatter-x" data-plot="x">${planners.map((p) => `<option ${p === this.plot.x ? "selected" : ""}>${escapeHtml(p)}</option>`).join("")}</select></label>
         <label>y axis <select data-testid="scatter-y" data-plot="y">${planners.map((p) => `<option ${p === this.plot.y ? "selected" : ""}>${escapeHtml(p)}</option>`).join("")}</select></label>
-        <span class="hint">Each point a seed; below the diagonal the y planner was faster. A click opens the two runs side by side.</span>
+        <span class="hint">Each point a seed; below the diagonal the y planner was faster. A hover names the seeds under the cursor; a click opens the nearest one's two runs side by side.</span>
       </div>`;
     const train = planners
       .map(
@@ -423,8 +427,9 @@ export class BenchPage {
     const { measure, x, y } = this.plot;
     const pts = this.points(info);
     const top = Math.max(1e-3, ...pts.map((p) => Math.max(p.x, p.y))) * 1.05;
+    this.drawn = [true, false].map((solved) => pts.filter((p) => p.solved === solved)); // by curve
     const trace = (solved) => {
-      const mine = pts.filter((p) => p.solved === solved);
+      const mine = this.drawn[solved ? 0 : 1];
       return {
         type: "scatter",
         mode: "markers",
@@ -432,7 +437,7 @@ export class BenchPage {
         x: mine.map((p) => p.x),
         y: mine.map((p) => p.y),
         customdata: mine.map((p) => [p.seed, p.a, p.b]),
-        marker: { color: solved ? SOLVED : UNSOLVED, size: 8, opacity: 0.75, symbol: solved ? "circle" : "x" },
+        marker: { color: solved ? SOLVED : UNSOLVED, size: MARKER_PX, opacity: 0.75, symbol: solved ? "circle" : "x" },
         hovertemplate: `seed %{customdata[0]}<br>${escapeHtml(x)} %{x:.2f} s<br>${escapeHtml(y)} %{y:.2f} s<extra></extra>`,
       };
     };
@@ -448,10 +453,22 @@ export class BenchPage {
       paper_bgcolor: "rgba(0,0,0,0)",
       plot_bgcolor: "rgba(0,0,0,0)",
     };
-    window.Plotly.react(box, [trace(true), trace(false)], layout, CONFIG);
-    box.dataset.points = String(pts.length);
+    window.Plotly.react(box, [trace(true), trace(false)], layout, CONFIG).then(() => {
+      box.dataset.points = String(pts.length);
+      box.dataset.measure = measure;
+    });
     if (!box.dataset.bound) {
       box.dataset.bound = "1";
+      // Where markers overlap, plotly's closest hover names one seed of those under the cursor
+      // (the last drawn, not the nearest): there it names every seed under the cursor instead,
+      // the nearest first, and so a click opens the nearest (plotly_click gets that order).
+      box.on("plotly_beforehover", (event) => {
+        if (typeof event?.clientX !== "number") return undefined;
+        const under = this.pointsAt(event.clientX, event.clientY);
+        if (under.length < 2) return undefined; // plotly's own hover: the nearest point
+        window.Plotly.Fx.hover(box, under.map(({ curve, index }) => ({ curveNumber: curve, pointNumber: index })));
+        return false;
+      });
       box.on("plotly_click", (event) => {
         const point = event.points?.[0];
         if (!point) return;
@@ -466,12 +483,34 @@ export class BenchPage {
     const box = $("bench-scatter");
     const p = this.points().find((q) => q.seed === seed);
     if (!box || !p || !box._fullLayout) return null;
+    return this._toPage(box)(p);
+  }
+
+  /** A function from a scatter point to where it is drawn on the page (client px). */
+  _toPage(box) {
     const full = box._fullLayout;
     const rect = box.getBoundingClientRect();
-    return {
+    return (p) => ({
       x: rect.left + full._size.l + full.xaxis.l2p(p.x),
       y: rect.top + full._size.t + full.yaxis.l2p(p.y),
-    };
+    });
+  }
+
+  /** The drawn points under the page point (x, y), nearest first (then by seed), each as
+   * {seed, curve, index, d}: its trace, its index in it and its distance in pixels. */
+  pointsAt(x, y) {
+    const box = $("bench-scatter");
+    if (!box?._fullLayout || !this.drawn) return [];
+    const toPage = this._toPage(box);
+    const out = [];
+    this.drawn.forEach((mine, curve) =>
+      mine.forEach((p, index) => {
+        const at = toPage(p);
+        const d = Math.hypot(at.x - x, at.y - y);
+        if (d <= UNDER_PX) out.push({ seed: p.seed, curve, index, d });
+      }),
+    );
+    return out.sort((a, b) => a.d - b.d || a.seed - b.seed);
   }
 }
 

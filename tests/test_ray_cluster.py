@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -79,7 +80,7 @@ def _hold_domain(tmp_path: Path) -> tuple[Path, Path]:
 
 
 @pytest.fixture(scope="module")
-def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
+def cluster() -> Iterator[Any]:
     """A head node that runs no trial (the driver's) and two worker nodes of one CPU each."""
     from ray.cluster_utils import Cluster
 
@@ -87,10 +88,12 @@ def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
     patch.setenv("RAY_AUTH_MODE", "disabled")
     patch.setenv("RAY_USAGE_STATS_ENABLED", "0")
     patch.setenv("RAY_worker_niceness", "0")  # trials timed like the process pool's
-    temp = tmp_path_factory.mktemp("ray")
+    # Ray's socket paths under its folder must fit in 107 bytes: a folder of /tmp, not pytest's
+    # (deeper still under pytest -n, .../popen-gw0/...).
+    temp = tempfile.mkdtemp(prefix="ray-")
     cluster = Cluster(
         initialize_head=True,
-        head_node_args={"num_cpus": 0, "include_dashboard": False, "temp_dir": str(temp)},
+        head_node_args={"num_cpus": 0, "include_dashboard": False, "temp_dir": temp},
     )
     try:
         cluster.add_node(num_cpus=1)
@@ -100,6 +103,7 @@ def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
     finally:
         cluster.shutdown()
         patch.undo()
+        shutil.rmtree(temp, ignore_errors=True)
 
 
 def _wait(what: str, ready: Callable[[], bool], timeout: float = 180.0) -> None:
