@@ -641,7 +641,14 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_horizon(args: argparse.Namespace) -> int:
     from planner.bench import make_config
     from planner.experiment import stderr_progress
-    from planner.horizon import find_bench, points, run_horizon, table_markdown, write
+    from planner.horizon import (
+        figure_title,
+        find_bench,
+        points,
+        run_horizon,
+        table_markdown,
+        write,
+    )
     from planner.store import default_db_path
 
     db = args.db or default_db_path()
@@ -679,8 +686,7 @@ def cmd_horizon(args: argparse.Namespace) -> int:
         raise ValueError("no benchmark to draw: run without --no-run first")
     print(table_markdown(pts))
     if args.out:
-        title = f"{', '.join(dict.fromkeys(p.planner for p in pts))}: seconds by objects"
-        for path in write(pts, args.out, title=title):
+        for path in write(pts, args.out, title=figure_title(pts)):
             print(f"wrote {path}")
     print(f"benchmarks {', '.join(ids)} in {db}")
     return 0

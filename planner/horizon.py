@@ -23,6 +23,7 @@ import html
 import json
 import logging
 import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -285,6 +286,29 @@ def _change(mean: float, low: float, high: float) -> str:
 
 
 COLORS = ("#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860")
+# The three planners keep their colour in every figure (a kitchen curve of baseline and learned
+# and a Panda curve of all three draw learned alike); other planners take the rest in order.
+NAMED_COLORS = {"baseline": COLORS[0], "paper": COLORS[1], "learned": COLORS[2]}
+
+
+def planner_colors(planners: Sequence[str]) -> dict[str, str]:
+    """A colour per planner: the named planners' own, then the remaining colours in turn."""
+    rest = [c for c in COLORS if c not in NAMED_COLORS.values()]
+    others = [p for p in dict.fromkeys(planners) if p not in NAMED_COLORS]
+    return {
+        p: NAMED_COLORS[p] if p in NAMED_COLORS else rest[others.index(p) % len(rest)]
+        for p in planners
+    }
+
+
+def figure_title(pts: Sequence[Point]) -> str:
+    """``kitchen: baseline, learned, 4 seeds a scene``: the scenes' family (their names
+    without the number), the planners and the seeds."""
+    families = dict.fromkeys(re.sub(r"-?\d+$", "", p.scene) for p in pts)
+    seeds = sorted({p.seeds for p in pts})
+    count = f"{seeds[0]}" if len(seeds) == 1 else f"{seeds[0]} to {seeds[-1]}"
+    unit = "seed" if seeds == [1] else "seeds"
+    return f"{', '.join(families)}: {', '.join(_planners(pts))}, {count} {unit} a scene"
 
 
 def figure_html(pts: Sequence[Point], title: str) -> str:
@@ -297,7 +321,8 @@ def figure_html(pts: Sequence[Point], title: str) -> str:
         cols=2,
         subplot_titles=("planning s (timeouts at the budget)", "total s (planning + execution)"),
     )
-    for i, planner in enumerate(_planners(pts)):
+    colors = planner_colors(_planners(pts))
+    for planner in _planners(pts):
         mine = sorted((p for p in pts if p.planner == planner), key=lambda p: p.objects)
         for col, measure in enumerate(MEASURES, start=1):
             values = [getattr(p, measure) for p in mine]
@@ -315,7 +340,7 @@ def figure_html(pts: Sequence[Point], title: str) -> str:
                     name=planner,
                     legendgroup=planner,
                     showlegend=col == 1,
-                    line={"color": COLORS[i % len(COLORS)]},
+                    line={"color": colors[planner]},
                     text=[f"{p.scene}: {p.solved}/{p.seeds} solved" for p in mine],
                 ),
                 row=1,
@@ -331,6 +356,7 @@ def figure_svg(pts: Sequence[Point], title: str, *, width: int = 900, height: in
     """The two panels as a plain SVG: each planner's means joined by lines, the intervals as
     bars, a legend; for docs, where a page cannot run plotly."""
     planners = _planners(pts)
+    colors = planner_colors(planners)
     xs = sorted({p.objects for p in pts})
     margin_l, margin_r, margin_t, margin_b, gap = 60, 20, 50, 60, 60
     panel_w = (width - margin_l - margin_r - gap) / 2
@@ -381,7 +407,7 @@ def figure_svg(pts: Sequence[Point], title: str, *, width: int = 900, height: in
             'text-anchor="middle">objects in the goal</text>'
         )
         for i, planner in enumerate(planners):
-            color = COLORS[i % len(COLORS)]
+            color = colors[planner]
             mine = sorted((p for p in pts if p.planner == planner), key=lambda p: p.objects)
             shift = (i - (len(planners) - 1) / 2) * 4  # side by side, so bars do not hide
             line = " ".join(
@@ -404,7 +430,7 @@ def figure_svg(pts: Sequence[Point], title: str, *, width: int = 900, height: in
                 )
     legend_x = margin_l
     for i, planner in enumerate(planners):
-        color = COLORS[i % len(COLORS)]
+        color = colors[planner]
         x = legend_x + i * 150
         y = height - 8
         parts.append(f'<rect x="{x}" y="{y - 5}" width="14" height="3" fill="{color}"/>')

@@ -10,6 +10,16 @@ import { escapeHtml } from "./format.js";
 const CONFIG = { displayModeBar: false, responsive: true };
 const FONT = { family: "system-ui, -apple-system, Segoe UI, sans-serif", size: 12, color: "#1f2937" };
 const COLORS = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860"]; // planner/horizon.py's
+const NAMED_COLORS = { baseline: COLORS[0], paper: COLORS[1], learned: COLORS[2] };
+
+/** A colour per planner, as planner/horizon.py's planner_colors: the three keep theirs in every
+ * series, other planners take the remaining colours in turn. */
+function plannerColors(planners) {
+  const named = Object.values(NAMED_COLORS);
+  const rest = COLORS.filter((c) => !named.includes(c));
+  const others = [...new Set(planners)].filter((p) => !(p in NAMED_COLORS));
+  return Object.fromEntries(planners.map((p) => [p, NAMED_COLORS[p] ?? rest[others.indexOf(p) % rest.length]]));
+}
 const CHARTS = [
   ["planning", "horizon-planning", "Planning s"],
   ["total", "horizon-total", "Total s (planning + execution)"],
@@ -117,6 +127,7 @@ export class HorizonPanel {
     const n = series.planners.length;
     CHARTS.forEach(([measure, id, title], c) => {
       const el = this.body.querySelector(`#${id}`);
+      const colors = plannerColors(series.planners);
       const traces = series.planners.map((planner, i) => {
         const mine = series.points.filter((p) => p.planner === planner);
         const shift = (i - (n - 1) / 2) * 0.012 * span; // side by side, so the bars do not hide
@@ -140,8 +151,8 @@ export class HorizonPanel {
             `<b>${escapeHtml(planner)}</b> · %{customdata[0]} (objects: %{customdata[6]})<br>` +
             `%{y:.2f} s (95%: %{customdata[4]:.2f} to %{customdata[5]:.2f})<br>` +
             `solved %{customdata[1]} / %{customdata[2]} seeds<br>benchmark %{customdata[3]}<extra></extra>`,
-          line: { color: COLORS[i % COLORS.length], width: 2 },
-          marker: { color: COLORS[i % COLORS.length], size: 8 },
+          line: { color: colors[planner], width: 2 },
+          marker: { color: colors[planner], size: 8 },
         };
       });
       const layout = {

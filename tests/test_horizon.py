@@ -10,7 +10,16 @@ import pytest
 
 from planner.bench import make_config
 from planner.cli import main
-from planner.horizon import find_bench, goal_objects, points, run_horizon, table_markdown, write
+from planner.horizon import (
+    COLORS,
+    find_bench,
+    goal_objects,
+    planner_colors,
+    points,
+    run_horizon,
+    table_markdown,
+    write,
+)
 from planner.store import RunStore
 
 TUTORIAL = Path(__file__).resolve().parents[1] / "examples" / "tabletop2d"
@@ -70,7 +79,8 @@ def test_the_command_resumes_and_draws(tmp_path: Path, capsys: pytest.CaptureFix
     assert main([*args, "--out", str(tmp_path / "h.svg")]) == 0
     out = capsys.readouterr().out
     assert "| tabletop-1 | 1 | baseline | 1/1 |" in out and "wrote" in out
-    assert (tmp_path / "h.svg").is_file()
+    # Titled by the scenes' family, the planners and the seeds.
+    assert "tabletop: baseline, 1 seed a scene" in (tmp_path / "h.svg").read_text()
     assert main([*args, "--no-run"]) == 0
     assert main([*args, "--out", str(tmp_path / "h.png")]) == 2  # not a figure format
     assert "expected a .html or .svg file" in capsys.readouterr().err
@@ -106,3 +116,12 @@ def test_a_benchmark_run_from_another_checkout_is_found_by_its_model_s_content(
     assert _same(stored, wanted)
     assert not _same({**stored, "model_sha256": "0" * 64}, wanted)  # another model
     assert not _same({**stored, "budget_s": 30.0}, wanted)
+
+
+def test_a_planner_has_one_colour_in_every_figure() -> None:
+    """A kitchen curve of baseline and learned and a Panda curve of all three draw each planner
+    alike; a variant takes a colour none of the three has."""
+    two = planner_colors(["baseline", "learned"])
+    three = planner_colors(["baseline", "paper", "learned", "learned:dead_ends=off"])
+    assert two["learned"] == three["learned"] and two["baseline"] == three["baseline"]
+    assert len(set(three.values())) == 4 and set(three.values()) <= set(COLORS)
