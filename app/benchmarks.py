@@ -78,6 +78,7 @@ class _Worker:
     cancel_at: float | None = None  # the user asked to cancel it
     stop_at: float | None = None  # it was asked to stop (cancelled, or the server shuts down)
     outcome: tuple[str, str | None] | None = None
+    ended: bool = False  # its ending is being recorded
 
 
 def _info(
@@ -428,8 +429,11 @@ class BenchService:
     def _ended(self, worker: _Worker, reason: str | None) -> None:
         bench_id = worker.bench_id
         with self._lock:
-            if self._workers.pop(bench_id, None) is None:
+            if worker.ended or self._workers.get(bench_id) is not worker:
                 return
+            worker.ended = True
+        # The worker stays listed until its ending is in the store: a reader in between would
+        # otherwise see the "interrupted" its process wrote on exit, not the "cancelled" below.
         kind, message = worker.outcome or ("died", None)
         try:
             status = self.store.get_bench(bench_id).status
@@ -452,5 +456,6 @@ class BenchService:
         with self._lock:
             if message:
                 self._messages[bench_id] = message
+            self._workers.pop(bench_id, None)
         worker.conn.close()
         log.info("benchmark %s ended: %s %s", bench_id, kind, message or "")

@@ -111,7 +111,9 @@ def test_tamp_bench_runs_show_up_and_a_dead_one_is_interrupted(
 
 
 @pytest.mark.slow
-def test_cancel_keeps_the_finished_trials_and_resume_runs_the_rest(client: TestClient) -> None:
+def test_cancel_keeps_the_finished_trials_and_resume_runs_the_rest(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
     body = {
         "scene": "tabletop-3",
         "planners": ["baseline"],
@@ -119,6 +121,16 @@ def test_cancel_keeps_the_finished_trials_and_resume_runs_the_rest(client: TestC
         "budget_s": 30,
         "workers": 1,
     }
+    # The server records a cancel's ending slowly here, so a reader polls while the worker's
+    # own "interrupted" is in the store: the benchmark must read "running" until "cancelled".
+    store = client.app.state.dashboard.store  # type: ignore[attr-defined]
+    record_status = store.set_bench_status
+
+    def slow_record(bench_id: str, status: str, **kw: Any) -> None:
+        time.sleep(1.5)
+        record_status(bench_id, status, **kw)
+
+    monkeypatch.setattr(store, "set_bench_status", slow_record)
     bench = client.post("/api/benchmarks", json=body).json()
     partway = _wait(client, bench["id"], done=2)
     assert partway["status"] == "running", partway
@@ -127,8 +139,9 @@ def test_cancel_keeps_the_finished_trials_and_resume_runs_the_rest(client: TestC
     deadline = time.monotonic() + 60
     while (info := client.get(f"/api/benchmarks/{bench['id']}").json())["status"] == "running":
         assert time.monotonic() < deadline
-        time.sleep(0.2)
+        time.sleep(0.05)
     assert info["status"] == "cancelled" and "kept" in info["message"]
+    monkeypatch.undo()
     kept = info["done"]
     assert 2 <= kept < 12
     assert len(info["summary"]["trials"]) == kept  # nothing finished was lost
