@@ -170,6 +170,22 @@ class LearnedConfig:
     pickplace-4 (e6d5278, 8 seeds) off asked 982 IK queries to on's 281, 821 of them failures,
     at no measurable cost in time."""
 
+    plans_by_estimate: bool = True
+    """The stream plan to go down is the one with the best estimate, without UCT's exploration
+    bonus among plans (ties to the top-k planner's order); below a plan's node the bonus stays.
+    Off: UCT at the root too, as the paper. Why: the k plans of a long problem are mostly the
+    same plan in other orders, predicted alike, so the bonus sends the search down each of them
+    once before it goes back to one it has started; where a query fails now and then (an IK
+    hemmed in by a block), every plan's rollout ends at such a failure and the progress made
+    on one plan is left for the next. Plans are still left by evidence: a dead end below a plan
+    raises its estimate.
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): helps on the Panda: panda-10 (40
+    seeds) total 7.8% more without it (3.7% to 12.0% more), planning 41% more, its plans
+    executing 5.2% longer; panda-12 (40 seeds) total 6.1% more (1.9% to 11.6% more); one
+    panda-10 seed's 1,058 queries become 102. Not measurable on kitchen-8 (30 seeds: total
+    0.1% more, 4.3% less to 4.9% more)."""
+
     @classmethod
     def paper(cls) -> LearnedConfig:
         """The paper's planner: every addition off (exhaustion, the streams' contract, stays)."""
@@ -481,6 +497,8 @@ class LearnedPolicy:
         plans = tree.live_children(ROOT)  # not the dead (exhausted) ones
         if self._scale <= 0:
             self._scale = max(min(self.q(tree, p) for p in plans), 1e-3)
+        if self.config.plans_by_estimate:  # max keeps the first of equals: the top-k order
+            return max(plans, key=lambda n: self._value(self._estimate(tree, n)))
         return max(
             plans,
             key=lambda n: self._value(self._estimate(tree, n)) + self._bonus(n.visits, root.visits),

@@ -309,3 +309,22 @@ def test_progress_below_a_node_makes_it_the_one_to_follow(subtree_min: bool) -> 
     policy.pick_plan(tree)
     assert policy.q(tree, untried) == pytest.approx(policy.q(tree, explored))
     assert policy.pick_child(tree, top).id == (explored.id if subtree_min else untried.id)
+
+
+@pytest.mark.parametrize("plans_by_estimate", [True, False])
+def test_the_search_goes_back_to_the_plan_it_has_started(plans_by_estimate: bool) -> None:
+    """plans_by_estimate: two stream plans predicted alike, one started (its first test bound,
+    visited often), the other never tried. On, the started plan's progress decides and the search
+    goes back down it; off (UCT among plans, as the paper), the exploration bonus of the untried
+    plan outweighs that progress and the search leaves the started plan for it."""
+    config = LearnedConfig(c_explore=1.0, plans_by_estimate=plans_by_estimate)
+    search, policy = make(ListSink(), config=config)
+    tree = search.tree
+    started = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    untried = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    bound = tree.add(started.id, plan_index=0, depth=1, success=True)
+    tree[ROOT].visits = started.visits = bound.visits = 20
+    policy.pick_plan(tree)
+    assert policy.q(tree, started) == pytest.approx(policy.q(tree, untried))
+    assert policy.q(tree, bound) < policy.q(tree, started)
+    assert policy.pick_plan(tree).id == (started.id if plans_by_estimate else untried.id)

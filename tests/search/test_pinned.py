@@ -11,7 +11,9 @@ its execution seconds, are the same on any machine at any load. The baseline's q
 recorded at e5923b3 (before domains became plug-ins), its execution seconds at 15f517c (before
 the visual meshes); the kitchen's learned trial was recorded again when the learned planner
 lost two of its parts, which made it another trial. The Panda's trials (baseline, and learned
-with its shipped model) were recorded when the domain came in.
+with its shipped model) were recorded when the domain came in; both learned trials were recorded
+again when the learned planner came to choose stream plans by their estimate
+(``plans_by_estimate``).
 
 To record a trial afresh after a change that is meant to change it:
 ``python -m tests.search.test_pinned SCENE SEED PLANNER``.
