@@ -183,8 +183,11 @@ class LearnedConfig:
     Measured (off against on, paired, docs/BENCHMARKS.md): helps on the Panda: panda-10 (40
     seeds) total 7.8% more without it (3.7% to 12.0% more), planning 41% more, its plans
     executing 5.2% longer; panda-12 (40 seeds) total 6.1% more (1.9% to 11.6% more); one
-    panda-10 seed's 1,058 queries become 102. Not measurable on kitchen-8 (30 seeds: total
-    0.1% more, 4.3% less to 4.9% more)."""
+    panda-10 seed's 1,058 queries become 102. Not measurable on panda-6 (40 seeds), kitchen-8
+    (30 seeds: total 0.1% more, 4.3% less to 4.9% more), kitchen-12 (10 seeds: 4.2% less,
+    15.8% less to 8.1% more) or tabletop-4 (40 seeds). What it gives up: a plan whose rollouts
+    keep failing far down is left only once its failures make dead ends (kitchen-12 seed 1008
+    planned 332 s with it, 142 s without)."""
 
     @classmethod
     def paper(cls) -> LearnedConfig:
