@@ -220,5 +220,8 @@ def test_a_search_whose_streams_are_all_exhausted_ends_instead_of_asking_again(
     if planner == "learned":
         again = plan("tiny-2", "learned:exhaustion=off", domain=exhaustible, seed=0, budget_s=3)
         assert again.status == "timeout"
-        asked = [q for q in again.result.queries if q.stream == "test-reachable"]
-        assert len(asked) > len(queried)
+        # Queries answered "nothing more for these inputs", in 3 s off against the whole run on
+        # (which stream is asked again depends on the plan the search stays on).
+        spent = [q for q in result.result.queries if q.exhausted]
+        asked = [q for q in again.result.queries if q.exhausted]
+        assert len(asked) > 2 * len(spent)
