@@ -115,6 +115,44 @@ class AbstractPlansFound(_EventBase):
 
 
 @dataclass(frozen=True)
+class SkeletonProgress(_EventBase):
+    """Word from the skeleton source while it works (before the first skeleton and whenever the
+    search asks it for more): which phase it is in and what it has done so far."""
+
+    type: ClassVar[str] = "skeleton_progress"
+
+    phase: str  # instantiate | translate | search | replan
+    message: str  # one line for people: "translating 2,497 stream instances"
+    seconds: float  # seconds the source has worked on this request so far
+
+    def _validate(self) -> None:
+        self._non_negative("seconds")
+
+
+@dataclass(frozen=True)
+class SkeletonsAdded(_EventBase):
+    """More skeletons during the search: the source produced them when the search asked for
+    another (their indices follow the earlier plans'), after what the search proved false."""
+
+    type: ClassVar[str] = "skeletons_added"
+
+    plans: list[dict[str, Any]]  # as AbstractPlansFound's, indices continuing
+    seconds: float  # wall seconds the source took for this batch
+    reason: str  # why the search asked: "more" (its widening rule or estimate), "all dead"
+    # What the search had proved false and the source now plans without: one line per fact
+    # or stream instance ("(cfree a p3 b p0) false", "ik(a p0 g1) exhausted").
+    learned: list[str] = field(default_factory=list)
+
+    def _validate(self) -> None:
+        self._non_negative("seconds")
+        for i, plan in enumerate(self.plans):
+            for key, hint in _PLAN_KEYS:
+                if key not in plan:
+                    self._fail(f"plans[{i}]", f"missing key {key!r}")
+                _check_value(plan[key], hint, f"{self.type}.plans[{i}].{key}")
+
+
+@dataclass(frozen=True)
 class NodeAdded(_EventBase):
     type: ClassVar[str] = "node_added"
 
@@ -255,13 +293,18 @@ class RunFinished(_EventBase):
     # CPU seconds of the search's thread outside the stream queries (selection, a learned
     # planner's features and predictions, events); None for planners without a tree search.
     search_cpu_s: float | None = None
+    # Wall seconds the skeleton source worked (the first skeletons and every later batch):
+    # planning_s - skeleton_s is the search's. None for runs recorded before it was counted.
+    skeleton_s: float | None = None
 
     def _validate(self) -> None:
         if self.status not in FINISH_STATUSES:
             self._fail(
                 "status", f"unknown status {self.status!r} (known: {', '.join(FINISH_STATUSES)})"
             )
-        self._non_negative("planning_s", "execution_s", "oracle_s", "queries", "search_cpu_s")
+        self._non_negative(
+            "planning_s", "execution_s", "oracle_s", "queries", "search_cpu_s", "skeleton_s"
+        )
 
 
 @dataclass(frozen=True)
@@ -282,7 +325,9 @@ class RunCancelled(_EventBase):
 
 Event: TypeAlias = (
     RunStarted
+    | SkeletonProgress
     | AbstractPlansFound
+    | SkeletonsAdded
     | NodeAdded
     | NodeVisited
     | StreamQueried
@@ -300,7 +345,9 @@ TERMINAL_TYPES = frozenset(c.type for c in (RunFinished, RunFailed, RunCancelled
 EventT = TypeVar(
     "EventT",
     RunStarted,
+    SkeletonProgress,
     AbstractPlansFound,
+    SkeletonsAdded,
     NodeAdded,
     NodeVisited,
     StreamQueried,

@@ -24,6 +24,8 @@ from planner.events import (
     RunFailed,
     RunFinished,
     RunStarted,
+    SkeletonProgress,
+    SkeletonsAdded,
     SolutionFound,
     StreamQueried,
     event_from_dict,
@@ -54,6 +56,18 @@ EXAMPLES: dict[str, Event] = {
             {"index": 1, "cost": 14.5, "actions": [], "streams": []},
         ],
         seconds=1.2,
+    ),
+    "skeleton_progress": SkeletonProgress(
+        RUN, 1, 0.4, phase="translate", message="translating 1,153 stream instances", seconds=0.4
+    ),
+    "skeletons_added": SkeletonsAdded(
+        RUN,
+        9,
+        7.5,
+        plans=[{"index": 2, "cost": 13.0, "actions": ["pick b2"], "streams": ["grasp(b2)"]}],
+        seconds=0.08,
+        reason="all dead",
+        learned=["(cfree a p3 b p0) false"],
     ),
     "node_added": NodeAdded(
         RUN,
