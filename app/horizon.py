@@ -69,6 +69,11 @@ class HorizonPoint(BaseModel):
         description="1 - mean execution / the first planner's mean total over the seeds both "
         "solved: what this planner would save planning in no time (None for the first)"
     )
+    skeleton: tuple[float, float, float] | None = Field(
+        default=None,
+        description="mean, low, high seconds of planning spent by the skeleton source (every "
+        "batch); None where no run recorded them",
+    )
 
 
 class HorizonBench(BaseModel):

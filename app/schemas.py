@@ -271,7 +271,10 @@ class TimeSplitOut(BaseModel):
     """Where a run's planning seconds went (planner.report.run_time_split), and execution."""
 
     planning_s: float
-    until_plans_s: float = Field(description="until the abstract plans were found (top-k)")
+    until_plans_s: float = Field(description="until the first skeletons were found")
+    later_skeletons_s: float = Field(
+        default=0.0, description="the skeletons the search asked for after the first"
+    )
     queries_s: float
     queries_by_stream_s: dict[str, float]
     search_s: float = Field(description="the rest: the search's own seconds")

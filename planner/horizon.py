@@ -59,6 +59,9 @@ class Point:
     # The zero-planning bound: 1 - mean(execution) / mean(reference total) over the seeds both
     # solved, what this planner would save if it planned in no time (None for the reference)
     bound: tuple[float, float, float] | None = None
+    # The skeleton source's share of planning: its seconds (every batch), mean and interval over
+    # the seeds whose runs recorded them (None: none did)
+    skeleton: tuple[float, float, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -73,6 +76,7 @@ class Point:
             "total": list(self.total),
             "improvement": None if self.improvement is None else list(self.improvement),
             "zero_planning_bound": None if self.bound is None else list(self.bound),
+            "skeleton": None if self.skeleton is None else list(self.skeleton),
         }
 
 
@@ -213,6 +217,7 @@ def summary_points(summary: dict[str, Any], objects: int) -> list[Point]:
             mean, low, high = zero["mean"], zero["low"], zero["high"]
             if mean is not None and low is not None and high is not None:
                 bound = (float(mean), float(low), float(high))
+        skeletons = [r[p]["skeleton"] for r in rows if r[p].get("skeleton") is not None]
         out.append(
             Point(
                 scene=_scene_name(str(config["scene"])),
@@ -226,6 +231,7 @@ def summary_points(summary: dict[str, Any], objects: int) -> list[Point]:
                 total=_interval([r[p]["total"] for r in rows], rng),
                 improvement=improvement,
                 bound=bound,
+                skeleton=_interval(skeletons, rng) if skeletons else None,
             )
         )
     return out
@@ -250,17 +256,18 @@ def table_markdown(pts: Sequence[Point]) -> str:
     against the reference if it planned in no time (where a target lies above it, no search
     reaches the target on that scene)."""
     lines = [
-        "| scene | objects | planner | solved | planning s (95% interval) "
+        "| scene | objects | planner | solved | planning s (95% interval) | of which skeletons "
         "| total s (95% interval) | total against the first planner | zero-planning bound "
         "| benchmark (code) |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for p in sorted(pts, key=lambda q: (q.objects, _planners(pts).index(q.planner))):
         against = "-" if p.improvement is None else _change(*p.improvement)
         bound = "-" if p.bound is None else _change(*p.bound).replace("**", "")
+        skeleton = "-" if p.skeleton is None else f"{p.skeleton[0]:.1f}"
         lines.append(
             f"| {p.scene} | {p.objects} | {p.planner} | {p.solved}/{p.seeds} "
-            f"| {_ci(p.planning)} | {_ci(p.total)} | {against} | {bound} "
+            f"| {_ci(p.planning)} | {skeleton} | {_ci(p.total)} | {against} | {bound} "
             f"| {p.bench_id} ({p.code or '?'}) |"
         )
     return "\n".join(lines)
@@ -346,6 +353,20 @@ def figure_html(pts: Sequence[Point], title: str) -> str:
                 row=1,
                 col=col,
             )
+        split = [p for p in mine if p.skeleton is not None]
+        if split:  # planning's part spent on skeletons, dashed under the planning curve
+            fig.add_trace(
+                go.Scatter(
+                    x=[p.objects for p in split],
+                    y=[p.skeleton[0] for p in split if p.skeleton is not None],
+                    mode="lines",
+                    name=f"{planner}: skeletons",
+                    legendgroup=planner,
+                    line={"color": colors[planner], "dash": "dash"},
+                ),
+                row=1,
+                col=1,
+            )
     fig.update_xaxes(title_text="objects in the goal", tickvals=sorted({p.objects for p in pts}))
     fig.update_yaxes(title_text="seconds", rangemode="tozero")
     fig.update_layout(title=title, height=460)
@@ -416,6 +437,17 @@ def figure_svg(pts: Sequence[Point], title: str, *, width: int = 900, height: in
             parts.append(
                 f'<polyline points="{line}" fill="none" stroke="{color}" stroke-width="2"/>'
             )
+            split = [p for p in mine if p.skeleton is not None]
+            if measure == "planning" and split:  # planning's part spent on skeletons
+                dashed = " ".join(
+                    f"{sx(p.objects) + shift:.1f},{sy(p.skeleton[0]):.1f}"
+                    for p in split
+                    if p.skeleton is not None
+                )
+                parts.append(
+                    f'<polyline points="{dashed}" fill="none" stroke="{color}" '
+                    'stroke-width="1.5" stroke-dasharray="5,4"/>'
+                )
             for p in mine:
                 mean, low, high = getattr(p, measure)
                 cx = sx(p.objects) + shift
@@ -435,6 +467,13 @@ def figure_svg(pts: Sequence[Point], title: str, *, width: int = 900, height: in
         y = height - 8
         parts.append(f'<rect x="{x}" y="{y - 5}" width="14" height="3" fill="{color}"/>')
         parts.append(f'<text x="{x + 20}" y="{y}">{html.escape(planner)}</text>')
+    if any(p.skeleton is not None for p in pts):
+        x = legend_x + len(planners) * 150
+        parts.append(
+            f'<line x1="{x}" x2="{x + 14}" y1="{height - 12}" y2="{height - 12}" stroke="#555" '
+            'stroke-dasharray="4,3"/>'
+        )
+        parts.append(f'<text x="{x + 20}" y="{height - 8}">of which skeletons (dashed)</text>')
     parts.append("</svg>")
     return "\n".join(parts) + "\n"
 

@@ -102,11 +102,13 @@ def run_time_split(
     until_plans_s: float,
     outcomes: Iterable[QueryOutcome],
     search_cpu_s: float | None = None,
+    later_skeletons_s: float = 0.0,
 ) -> dict[str, Any]:
-    """Where one run's planning seconds went: until the abstract plans were found (top-k, and a
-    learned planner's model loading and stream order), the stream queries' own seconds (in
-    all and per stream), and the rest, the search itself (selection, a learned planner's
-    feature rows and predictions, events). ``outcomes`` are the run's queries.
+    """Where one run's planning seconds went: until the first skeletons were found (the
+    skeleton source, and a learned planner's model loading and stream order), the skeletons the
+    search asked for later (``later_skeletons_s``), the stream queries' own seconds (in all and
+    per stream), and the rest, the search itself (selection, a learned planner's feature rows
+    and predictions, events). ``outcomes`` are the run's queries.
 
     ``search_s`` is wall time, so on a busy machine it holds the seconds the search waited for
     a core; ``search_cpu_s`` (recorded by the run, None for runs before it was) is the
@@ -118,9 +120,10 @@ def run_time_split(
     return {
         "planning_s": planning_s,
         "until_plans_s": until_plans_s,
+        "later_skeletons_s": later_skeletons_s,
         "queries_s": queries,
         "queries_by_stream_s": dict(sorted(by_stream.items())),
-        "search_s": planning_s - until_plans_s - queries,
+        "search_s": planning_s - until_plans_s - later_skeletons_s - queries,
         "search_cpu_s": search_cpu_s,
     }
 
@@ -130,6 +133,7 @@ def time_split(
     plans_at: Mapping[str, float],
     outcomes: Iterable[QueryOutcome],
     search_cpu: Mapping[str, float] | None = None,
+    later: Mapping[str, float] | None = None,
 ) -> dict[str, Any]:
     """:func:`run_time_split` of a planner's trials, on average over the trials with a run
     (``search_cpu_s``: over those that recorded it, None if none did)."""
@@ -138,6 +142,7 @@ def time_split(
         return {
             "planning_s": None,
             "until_plans_s": None,
+            "later_skeletons_s": None,
             "queries_s": None,
             "queries_by_stream_s": {},
             "search_s": None,
@@ -154,6 +159,7 @@ def time_split(
             plans_at.get(t.run_id or "", 0.0),
             mine[t.run_id or ""],
             cpu.get(t.run_id or ""),
+            (later or {}).get(t.run_id or "", 0.0),
         )
         for t in trials
         if t.run_id in ids
@@ -168,6 +174,7 @@ def time_split(
     return {
         "planning_s": mean("planning_s"),
         "until_plans_s": mean("until_plans_s"),
+        "later_skeletons_s": mean("later_skeletons_s"),
         "queries_s": mean("queries_s"),
         "queries_by_stream_s": {
             stream: sum(split["queries_by_stream_s"].get(stream, 0.0) for split in splits) / n
@@ -232,6 +239,12 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
         outcomes = store.query_outcomes(run_ids)
         plans_at = store.event_times(run_ids, "abstract_plans_found")
         search_cpu = store.event_numbers(run_ids, "run_finished", "search_cpu_s")
+        skeleton_s = store.event_numbers(run_ids, "run_finished", "skeleton_s")
+        first_s = store.event_numbers(run_ids, "abstract_plans_found", "seconds")
+    # The skeleton source's seconds per run (every batch), and those of the batches the search
+    # asked for after the first (runs recorded before they were counted: the first's only).
+    skeletons = {r: skeleton_s.get(r, first_s.get(r, 0.0)) for r in run_ids}
+    later = {r: max(skeletons[r] - first_s.get(r, skeletons[r]), 0.0) for r in run_ids}
     planner_of = {t.run_id: t.planner for t in trials if t.run_id}
     config = bench.config
     planners: list[str] = list(config["planners"])
@@ -257,8 +270,9 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
             "total_s_censored": _stats([_times(t, budget)["total"] for t in ts]),
             "planning_over_oracle": _stats(ratios),
             "time_split": time_split(
-                [t for t in ts if t.run_id], plans_at, outcomes, search_cpu
+                [t for t in ts if t.run_id], plans_at, outcomes, search_cpu, later
             ),  # over every trial with a run
+            "skeleton_s": _stats([skeletons[t.run_id] for t in ts if t.run_id]),
             "queries": query_summary(q for q in outcomes if planner_of.get(q.run_id) == p),
         }
     rng = np.random.default_rng(0)
@@ -280,6 +294,8 @@ def summarize(db: str | Path, bench_id: str) -> dict[str, Any]:
                     **(_times(by[p][s], budget) if s in by[p] else {}),
                     "run_id": by[p][s].run_id if s in by[p] else None,
                     "error": by[p][s].error if s in by[p] else None,
+                    # the skeleton source's seconds (every batch): planning's part not searched
+                    "skeleton": skeletons.get(by[p][s].run_id or "") if s in by[p] else None,
                 }
                 for p in planners
             },

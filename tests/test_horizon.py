@@ -64,7 +64,9 @@ def test_a_series_runs_once_and_is_taken_again(tmp_path: Path) -> None:
     written = write(pts, svg, title="tutorial")
     assert written == [svg, svg.with_suffix(".json")]
     text = svg.read_text()
-    assert text.startswith("<svg") and text.count("<polyline") == 4  # 2 planners x 2 panels
+    # 2 planners x 2 panels, and each planner's skeleton seconds dashed in the planning panel
+    assert text.startswith("<svg") and text.count("<polyline") == 6
+    assert text.count('stroke-dasharray="5,4"') == 2
     assert json.loads(svg.with_suffix(".json").read_text())[0]["objects"] == 1
     html = write(pts, tmp_path / "h.html", title="tutorial")[0].read_text()
     assert "plotly" in html.lower()

@@ -151,9 +151,12 @@ def test_rows_have_a_fixed_length_per_stream_and_mask_unbound_inputs(
     assert bound[start : start + 5] == pytest.approx(
         [pose["x"], pose["y"], 0.755, math.cos(pose["yaw"]), math.sin(pose["yaw"])], abs=1e-6
     )
-    # a name outside the vocabulary falls in the unknown bucket
-    odd = featurizer.row("inverse-kinematics", ["b99", None, None], ik.context)
+    # a name outside the vocabulary falls in the unknown bucket (a block's name is cleared
+    # altogether: test_relative_features_do_not_stop_at_eight_blocks)
+    odd = featurizer.row("inverse-kinematics", ["crate7", None, None], ik.context)
     assert odd[names.index("in0.is_unknown")] == 1.0
+    block = featurizer.row("inverse-kinematics", ["b99", None, None], ik.context)
+    assert not block[[i for i, n in enumerate(names) if n.startswith("in0.is_")]].any()
 
     arity = {"sample-grasp": 1, "sample-placement": 2, "plan-motion": 2}
     for stream, n in arity.items():
@@ -213,8 +216,16 @@ def test_a_placement_sees_the_room_left_on_its_platform() -> None:
             featurizer.row("sample-placement", ["b4", "stove"], {"geometry": bad, "facts": []})
 
 
+def _layout(featurizer: Featurizer, layout: str) -> Featurizer:
+    """The same features with the kitchen's state in ``layout`` (the shipped model's "names")."""
+    spec = featurizer.spec.to_dict()
+    return Featurizer.from_spec(
+        {**spec, "state": {**spec["state"], "layout": layout}}, domain=KITCHEN
+    )
+
+
 def test_scene_features_read_the_facts() -> None:
-    featurizer = Featurizer.fit([], domain=KITCHEN)
+    featurizer = _layout(Featurizer.fit([], domain=KITCHEN), "names")  # the shipped model's
     context = {
         "facts": [
             ["at-pose", "b1", "p1"],
@@ -243,6 +254,43 @@ def test_scene_features_read_the_facts() -> None:
     assert [f("b4.present"), f("b4.held"), f("b4.on_table")] == [1.0, 1.0, 0.0]
     assert [f("b5.present"), f("b8.present")] == [0.0, 0.0]  # padded to max_blocks
     assert (f("n_on_stove"), f("n_on_sink")) == (3.0, 1.0)
+
+
+def test_relative_features_do_not_stop_at_eight_blocks() -> None:
+    """What tamp train fits: a row is as wide for kitchen-24 as for kitchen-4, and a query about
+    b17 of a long kitchen reads b17's own state; renamed, it reads exactly what a query about b2
+    in the same state of a short kitchen reads (names say nothing of a block)."""
+    featurizer = Featurizer.fit([], domain=KITCHEN)
+    assert featurizer.spec.state["layout"] == "relative"
+    names = featurizer.feature_names("inverse-kinematics")
+
+    def state(blocks: list[str], me: str) -> dict[str, Any]:
+        facts = [["on", b, "stove"] for b in blocks if b != me]
+        facts += [["cooked", b] for b in blocks if b != me]
+        facts += [["on", me, "sink"], ["at-pose", me, "pm"], ["cleaned", me], ["hand-empty"]]
+        return {"facts": facts, "values": {"pm": _pose(0.02, 1.1, 0.3)}}
+
+    long = [f"b{i}" for i in range(1, 25)]
+    short = ["b1", "b2", "b3", "b4"]
+    inputs = ["b17", {"type": "pose", "x": 0.0, "y": 1.1, "z": 0.755, "yaw": 0.0}, None]
+    row = featurizer.row("inverse-kinematics", inputs, state(long, "b17"))
+    assert row.shape == (featurizer.width("inverse-kinematics"),)
+
+    def f(r: Any, name: str) -> float:
+        return float(r[names.index(name)])
+
+    own = [f(row, f"own.{k}") for k in ("present", "on_sink", "on_stove", "held", "x", "y")]
+    assert own == pytest.approx([1.0, 1.0, 0.0, 0.0, 0.02, 1.1])
+    assert [f(row, n) for n in ("n_stove", "n_sink", "n_cooked", "n_cleaned")] == [23, 1, 23, 1]
+    # The same state in a kitchen of four blocks, the query about b2: only the counts differ.
+    small = featurizer.row("inverse-kinematics", ["b2", *inputs[1:]], state(short, "b2"))
+    differ = [n for n, a, b in zip(names, row, small, strict=True) if a != b]
+    assert differ == ["n_stove", "n_cooked"]
+    # A motion is about the block the hand holds.
+    held = {"facts": [["holding", "b21", "g"], ["on", "b3", "table"]], "values": {}}
+    motion = featurizer.feature_names("plan-motion")
+    m = featurizer.row("plan-motion", [None, None], held)
+    assert m[motion.index("own.present")] == 1.0 and m[motion.index("own.held")] == 1.0
 
 
 def test_feature_spec_round_trips_through_a_plain_dict(data: list[QueryRecord]) -> None:

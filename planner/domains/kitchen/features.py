@@ -1,9 +1,17 @@
 """The kitchen's own feature hook (``DomainSpec.features``): the blocks' state, and the room left
-on a platform for a placement.
+on a platform for a placement. Two layouts (``KitchenEncoder.layout``):
 
-The state part has, for each block ``b1..b<max_blocks>``, ``[present, on table, on sink, on
-stove, held, x, y, cos yaw, sin yaw]`` (zeros when the block is absent or its pose is not known)
-and then the number of blocks on the stove and on the sink.
+**relative** (what ``tamp train`` fits): nothing depends on how many blocks a scene has or what
+they are called, so a model trained on short kitchens reads long ones as it read the short. The
+state part counts the blocks on the table, in the sink, on the stove, held, cleaned and cooked.
+Every stream's row also gets, after its input slots, its own block's ``[present, on table, on
+sink, on stove, held, x, y, cos yaw, sin yaw]``: the block it is asked about (its first input
+naming a block) or, for a stream about no block (motion), the block the hand holds.
+
+**names** (the shipped model's): for each block ``b1..b<max_blocks>`` (8), ``[present, on
+table, on sink, on stove, held, x, y, cos yaw, sin yaw]`` (zeros when the block is absent or its
+pose is not known) and then the number of blocks on the stove and on the sink. Blocks past b8
+have no features of their own; they are counted.
 
 A placement also gets the room left on its platform, after its input slots:
 ``[unknown, room, blocks on it]``. ``room`` is how far the block's centre can stay from every
@@ -30,6 +38,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -43,7 +52,11 @@ from planner.values import JSON, FeatureError, ValueCodec
 KIND = "kitchen"  # the name model files give these features
 PLATFORMS = ("table", "sink", "stove")  # one "on <platform>" feature each, in this order
 COUNTED = ("stove", "sink")  # "how many blocks are on it" features, in this order
-MAX_BLOCKS = 8  # b1..b8: the largest kitchen scene
+MAX_BLOCKS = 8  # b1..b8: the largest kitchen scene when the names layout came in
+LAYOUTS = ("relative", "names")
+RELATIVE_COUNTS = ("table", "sink", "stove", "held", "cleaned", "cooked")  # relative state part
+OWN_WIDTH = 9  # a block's own features: present, on table/sink/stove, held, x, y, cos, sin
+_BLOCK_NAME = re.compile(r"b\d+")  # the kitchen's blocks are b1, b2, ...
 ROOM: Mapping[str, int] = {"sample-placement": 1}  # streams with room features: platform input
 ROOM_WIDTH = 3  # unknown, room (cm), blocks on the platform
 ROOM_CAP = 30.0  # centimetres: more room than this is plenty
@@ -55,6 +68,9 @@ FloatArray = npt.NDArray[np.float32]
 # (present, on a platform, held, the counts), and per block with an at-pose fact, where its pose
 # goes in the state part and the pose's name.
 _FactsRead = tuple[FloatArray, list[tuple[int, str]]]
+# What a facts list says of the blocks (KitchenEncoder._read_blocks): the blocks it names, the
+# held one, each block's platform and the name of its pose.
+_BlocksRead = tuple[frozenset[str], str | None, dict[str, str], dict[str, str]]
 
 
 def _numbers(value: Any, n: int, where: str) -> list[float]:
@@ -79,6 +95,7 @@ class KitchenEncoder:
     counted: tuple[str, ...] = COUNTED
     room: Mapping[str, int] | None = None  # stream -> input naming the platform
     conf_spill: bool = True  # the last arm joint where the shipped model saw it (docstring)
+    layout: str = "names"  # see the module docstring; tamp train fits "relative"
     _block_index: dict[str, int] = field(init=False, repr=False, compare=False)
     _platform_index: dict[str, int] = field(init=False, repr=False, compare=False)
     _facts_read: dict[int, tuple[list[Any], _FactsRead]] = field(
@@ -93,12 +110,20 @@ class KitchenEncoder:
     _rooms: dict[tuple[Any, ...], tuple[Any, list[Any], list[float]]] = field(
         init=False, repr=False, compare=False, default_factory=dict
     )
+    _blocks_read: dict[int, tuple[list[Any], _BlocksRead]] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
+    _counts_read: dict[int, tuple[list[Any], FloatArray]] = field(
+        init=False, repr=False, compare=False, default_factory=dict
+    )
 
     def __post_init__(self) -> None:
         if self.max_blocks < 1:
             raise FeatureError(f"max_blocks must be >= 1, got {self.max_blocks}")
         if not set(self.counted) <= set(self.platforms):
             raise FeatureError(f"counted platforms {self.counted} are not all in {self.platforms}")
+        if self.layout not in LAYOUTS:
+            raise FeatureError(f"unknown layout {self.layout!r} (known: {', '.join(LAYOUTS)})")
         object.__setattr__(self, "room", dict(ROOM if self.room is None else self.room))
         object.__setattr__(
             self, "_block_index", {f"b{i}": i - 1 for i in range(1, self.max_blocks + 1)}
@@ -117,18 +142,85 @@ class KitchenEncoder:
             "counted": list(self.counted),
             "room": dict(self.room or {}),
             "conf_spill": self.conf_spill,
+            "layout": self.layout,
         }
 
     @property
+    def relative(self) -> bool:
+        return self.layout == "relative"
+
+    @property
     def scene_width(self) -> int:
+        if self.relative:
+            return len(RELATIVE_COUNTS)
         return self.max_blocks * (len(self.platforms) + 6) + len(self.counted)
 
     def stream_width(self, stream: str) -> int:
-        return ROOM_WIDTH if stream in (self.room or {}) else 0
+        room = ROOM_WIDTH if stream in (self.room or {}) else 0
+        return room + (OWN_WIDTH if self.relative else 0)
 
     def stream_features(
         self, stream: str, inputs: Sequence[JSON | None], context: Mapping[str, Any]
     ) -> Sequence[float]:
+        own = self._own_block(inputs, context) if self.relative else []
+        if stream not in (self.room or {}):
+            return own
+        return [*self._room_features(stream, inputs, context), *own]
+
+    def _own_block(self, inputs: Sequence[JSON | None], context: Mapping[str, Any]) -> list[float]:
+        """``[present, on table, on sink, on stove, held, x, y, cos yaw, sin yaw]`` of the block
+        the query is about: its first input naming a block in the state, else the held one."""
+        facts = context.get("facts", [])
+        if not isinstance(facts, list):
+            raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
+        blocks, held, where, poses = self._read_blocks(facts)
+        block = next((v for v in inputs if isinstance(v, str) and v in blocks), held)
+        out = [0.0] * OWN_WIDTH
+        if block is None:
+            return out
+        out[0] = 1.0
+        platform = where.get(block)
+        if platform is not None and platform in self._platform_index:
+            out[1 + self._platform_index[platform]] = 1.0
+        if block == held:
+            out[1 + len(self.platforms)] = 1.0
+        name = poses.get(block)
+        values = context.get("values", {})
+        pose = values.get(name) if name is not None and isinstance(values, Mapping) else None
+        if isinstance(pose, Mapping) and _is_pose(pose):
+            out[2 + len(self.platforms) : OWN_WIDTH] = self._pose_numbers(pose, str(name))
+        return out
+
+    def _read_blocks(self, facts: list[Any]) -> _BlocksRead:
+        """The blocks a state names, the held one, each block's platform and pose name."""
+        cached = self._blocks_read.get(id(facts))
+        if cached is not None and cached[0] is facts:
+            return cached[1]
+        blocks: set[str] = set()
+        held: str | None = None
+        where: dict[str, str] = {}
+        poses: dict[str, str] = {}
+        for fact in facts:
+            if not isinstance(fact, list) or len(fact) < 2:
+                continue
+            predicate, block = fact[0], fact[1]
+            if predicate in ("on", "holding", "at-pose", "cleaned", "cooked"):
+                blocks.add(block)
+            if predicate == "on" and len(fact) == 3:
+                where[block] = fact[2]
+            elif predicate == "holding":
+                held = block
+            elif predicate == "at-pose" and len(fact) == 3:
+                poses[block] = fact[2]
+        read: _BlocksRead = (frozenset(blocks), held, where, poses)
+        if len(self._blocks_read) >= FACTS_READ_MAX:
+            self._blocks_read.clear()
+        self._blocks_read[id(facts)] = (facts, read)  # the list is kept: its id is not reused
+        return read
+
+    def _room_features(
+        self, stream: str, inputs: Sequence[JSON | None], context: Mapping[str, Any]
+    ) -> list[float]:
         at = (self.room or {})[stream]
         if len(inputs) <= at:
             raise FeatureError(f"stream {stream!r}: room input {at} is not given")
@@ -172,6 +264,15 @@ class KitchenEncoder:
         row: FloatArray,
         slots: Sequence[tuple[str, int, int]],
     ) -> None:
+        if self.relative:
+            # A block's name says nothing of it (b9 of kitchen-12 is a block like b2): its
+            # one-hot is cleared, so that a model reads the block only through its own
+            # features, in any scene, whatever its blocks are called.
+            for i, (kind, offset, width) in enumerate(slots):
+                value = inputs[i]
+                if kind == "name" and isinstance(value, str) and _BLOCK_NAME.fullmatch(value):
+                    row[offset + 1 : offset + width] = 0.0
+            return
         if not self.conf_spill:
             return
         for i, (kind, offset, width) in enumerate(slots):
@@ -187,23 +288,52 @@ class KitchenEncoder:
                 row[at] = wrist
 
     def feature_names(self, stream: str) -> tuple[list[str], list[str]]:
-        extra = ["room.unknown", "room.cm", "room.blocks"] if self.stream_width(stream) else []
+        room = ["room.unknown", "room.cm", "room.blocks"] if stream in (self.room or {}) else []
         on = [f"on_{p}" for p in self.platforms]
         per_block = ["present", *on, "held", "x", "y", "cos_yaw", "sin_yaw"]
+        if self.relative:
+            return room + [f"own.{f}" for f in per_block], [f"n_{c}" for c in RELATIVE_COUNTS]
         scene = [f"{b}.{f}" for b in self.blocks for f in per_block]
-        return extra, scene + [f"n_on_{p}" for p in self.counted]
+        return room, scene + [f"n_on_{p}" for p in self.counted]
 
     def scene_features(self, context: Mapping[str, Any], out: FloatArray, offset: int) -> None:
         facts = context.get("facts", [])
         values = context.get("values", {})
         if not isinstance(facts, list) or not isinstance(values, Mapping):
             raise FeatureError("context: expected {'facts': [...], 'values': {...}}")
+        if self.relative:
+            out[offset : offset + len(RELATIVE_COUNTS)] = self._counts(facts)
+            return
         part, poses = self._read_facts(facts)
         out[offset : offset + len(part)] = part
         for at, name in poses:
             pose = values.get(name)
             if isinstance(pose, Mapping) and _is_pose(pose):
                 out[offset + at : offset + at + 4] = self._pose_numbers(pose, name)
+
+    def _counts(self, facts: list[Any]) -> FloatArray:
+        """The relative layout's state part: blocks on the table, sink and stove, held,
+        cleaned, cooked (every block, whatever its name)."""
+        cached = self._counts_read.get(id(facts))
+        if cached is not None and cached[0] is facts:
+            return cached[1]
+        counts = dict.fromkeys(RELATIVE_COUNTS, 0.0)
+        for fact in facts:
+            if not isinstance(fact, list) or not fact or not all(isinstance(a, str) for a in fact):
+                raise FeatureError(f"context: malformed fact {fact!r}")
+            predicate = fact[0]
+            if predicate == "on" and len(fact) == 3 and fact[2] in counts:
+                counts[fact[2]] += 1.0
+            elif predicate == "holding":
+                counts["held"] += 1.0
+            elif predicate in ("cleaned", "cooked"):
+                counts[predicate] += 1.0
+        part = np.array([counts[c] for c in RELATIVE_COUNTS], dtype=np.float32)
+        part.flags.writeable = False
+        if len(self._counts_read) >= FACTS_READ_MAX:
+            self._counts_read.clear()
+        self._counts_read[id(facts)] = (facts, part)
+        return part
 
     def _pose_numbers(self, pose: Mapping[str, Any], name: str) -> FloatArray:
         """``[x, y, cos yaw, sin yaw]`` of an encoded pose, computed once per pose object (a
@@ -269,7 +399,7 @@ class KitchenFeatures:
     kind = KIND
 
     def fit(self, records: Sequence[QueryLike], codec: ValueCodec) -> KitchenEncoder:
-        return KitchenEncoder()
+        return KitchenEncoder(layout="relative")
 
     def load(self, data: Mapping[str, Any], codec: ValueCodec) -> KitchenEncoder:
         try:
@@ -279,6 +409,7 @@ class KitchenFeatures:
                 counted=tuple(str(p) for p in data["counted"]),
                 room={str(k): int(v) for k, v in data.get("room", {}).items()},
                 conf_spill=bool(data.get("conf_spill", True)),
+                layout=str(data.get("layout", "names")),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise FeatureError(f"malformed kitchen features: missing or bad field {exc}") from exc
