@@ -64,6 +64,31 @@ def test_pick_place_2d_solves_with_a_valid_plan(planner: str) -> None:
 
 
 @pytest.mark.parametrize("planner", ["baseline", "learned"])
+def test_a_block_in_the_way_is_moved_first(planner: str) -> None:
+    """pickplace-blocked-3 (PDDLStream's blocked problem): B stands in the middle of the red
+    region and leaves no room for A. The first skeleton places A beside B; its clearance test
+    fails for every pose drawn, the search doubts it and asks for another skeleton, and the one
+    it gets moves B out of the way first."""
+    from planner.events import ListSink, SkeletonsAdded
+
+    loaded = load_domain_folder(PICK_PLACE)
+    sink = ListSink()
+    result = plan(
+        str(PICK_PLACE / "scenes" / "pickplace-blocked-3.json"),
+        planner,
+        domain=loaded,
+        seed=1000,
+        budget_s=300,
+        sink=sink,
+    )
+    assert result.status == "solved" and result.valid, result.message
+    picked = [a.args[0] for a in result.actions if a.name == "pick"]
+    assert picked.index("b") < picked.index("a"), result.actions
+    added = [e for e in sink.events if isinstance(e, SkeletonsAdded) and e.plans]
+    assert added and any("cfree a" in line and "doubted" in line for line in added[0].learned)
+
+
+@pytest.mark.parametrize("planner", ["baseline", "learned"])
 def test_blocks_streams_builds_the_tower(planner: str) -> None:
     loaded = load_domain_folder(BLOCKS)
     result = plan(
