@@ -57,8 +57,9 @@ class InstanceRecords:
         self.fluent_streams = fluent_streams
         self.on_doubts = on_doubts
         self.records: dict[InstanceKey, InstanceRecord] = {}
+        self.verdicts: dict[InstanceKey, str] = {}  # "false" or "doubted", kept as they change
         self.doubted: frozenset[InstanceKey] = frozenset()  # false ones too
-        self._feedback: Feedback | None = None  # as of the last change
+        self._feedback: Feedback | None = None  # as of the last change of a verdict
 
     def __len__(self) -> int:
         return len(self.records)
@@ -74,13 +75,16 @@ class InstanceRecords:
             record.successes += 1
         elif result.exhausted and record.successes == 0:
             record.empty = True
+        verdict = self._proves(record)
+        if verdict == self.verdicts.get(key):
+            return
+        if verdict is None:
+            del self.verdicts[key]
+        else:
+            self.verdicts[key] = verdict
         self._feedback = None
-        before = self.doubted
-        if key not in before and self._proves(record) is not None:
-            self.doubted = before | {key}
-        elif key in before and record.successes:
-            self.doubted = before - {key}  # possible after all
-        if self.doubted is not before and self.on_doubts is not None:
+        self.doubted = frozenset(self.verdicts)
+        if self.on_doubts is not None:
             self.on_doubts(self.doubted)
 
     def _proves(self, record: InstanceRecord) -> str | None:
@@ -102,11 +106,7 @@ class InstanceRecords:
             return self._feedback
         false: set[Atom] = set()
         doubted: set[Atom] = set()
-        for record in self.records.values():
-            verdict = self._proves(record)
-            if verdict == "false":
-                false.update(record.instance.certified)
-            elif verdict == "doubted":
-                doubted.update(record.instance.certified)
+        for key, verdict in self.verdicts.items():
+            (false if verdict == "false" else doubted).update(self.records[key].instance.certified)
         self._feedback = Feedback(frozenset(false), frozenset(doubted - false))
         return self._feedback
