@@ -13,7 +13,7 @@ from typing import Any
 
 from fastapi import FastAPI, HTTPException, Request, WebSocket
 from fastapi.exceptions import RequestValidationError, WebSocketRequestValidationError
-from fastapi.responses import FileResponse, JSONResponse
+from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
 from starlette.routing import Match, Route
@@ -25,6 +25,7 @@ from app.routes import benchmarks, compare, models
 from app.security import Access, Guard, Refusal, refusal_response
 from app.services import Dashboard
 from app.settings import WILDCARD_HOSTS, Settings
+from planner import figures
 
 log = logging.getLogger(__name__)
 
@@ -123,7 +124,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         lifespan=lifespan,
     )
     app.add_middleware(ReadCache, version=lambda: _store_version(app))
-    app.add_middleware(Guard, access=access, max_body_bytes=settings.max_body_bytes)  # outermost
+    app.add_middleware(  # outermost
+        Guard,
+        access=access,
+        max_body_bytes=settings.max_body_bytes,
+        max_json_items=settings.max_json_items,
+    )
 
     @app.exception_handler(RequestValidationError)
     async def bad_request(_request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -160,6 +166,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @app.get("/", include_in_schema=False)
     def index() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html")
+
+    definitions = figures.definitions_js()
+
+    @app.get("/generated/definitions.js", include_in_schema=False)
+    def shared_definitions() -> Response:
+        """planner/figures.py's definitions, as the page's module imports them."""
+        return Response(definitions, media_type="text/javascript")
 
     @app.get("/vendor/plotly.min.js", include_in_schema=False)
     def plotly() -> FileResponse:
