@@ -12,6 +12,7 @@ from fastapi.testclient import TestClient
 
 from app.main import create_app
 from app.settings import Settings
+from planner import figures
 from planner.experiment import Trial, run_trial
 from planner.report import run_time_split
 from planner.store import RunStore
@@ -88,6 +89,7 @@ def test_two_planners_part_at_a_node_both_trees_name(
     assert q and data["q_scale"] is not None
     lo, hi = data["q_scale"]
     assert min(q) <= lo <= hi <= max(q)
+    assert (lo, hi) == figures.q_scale(q)  # the page's own scale (planner/figures.py)
     assert all(v is None for v in trees[a]["q"])  # the baseline predicts nothing
 
 
