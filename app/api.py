@@ -214,7 +214,9 @@ def shown(request: Request) -> ViewerShown:
         node=node,
         picked=None
         if picked is None
-        else Picked(node_id=picked.node_id, label=picked.label, count=picked.count),
+        else Picked(
+            node_id=picked.node_id, label=picked.label, count=picked.count, run_id=picked.run_id
+        ),
     )
 
 

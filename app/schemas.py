@@ -181,6 +181,7 @@ class Picked(BaseModel):
     node_id: int
     label: str
     count: int = Field(description="how many ghosts have been clicked so far (changes with each)")
+    run_id: str | None = Field(None, description="the run shown when it was clicked")
 
 
 class ViewerShown(BaseModel):
