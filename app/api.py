@@ -207,6 +207,8 @@ def shown(request: Request) -> ViewerShown:
     dash = _dash(request)
     run_id, step, node = dash.viewer.shown or (None, None, None)
     picked = dash.viewer.picked()
+    if picked is not None and picked.run_id is not None and picked.run_id != run_id:
+        picked = None  # a click in the run shown before (the view is about to forget it)
     return ViewerShown(
         url=dash.viewer_url(request.headers.get("host")),
         run_id=run_id,

@@ -252,6 +252,9 @@ class RunViewer:
         log.debug("viser: %s", banner.getvalue().strip())
         self._server.scene.set_up_direction("+z")
         gui = self._server.gui
+        # A narrow panel: the view stands beside the page's tree. No share button: a run's
+        # scene is not for a public tunnel.
+        gui.configure_theme(control_width="small", show_share_button=False)
         self._status = gui.add_markdown("No run shown yet.")
         with gui.add_folder("Camera"):
             self._frame_button = gui.add_button("Frame the scene", icon=viser.Icon.FOCUS_2)

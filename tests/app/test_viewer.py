@@ -367,10 +367,27 @@ def test_the_view_renders_in_a_browser_and_plays(
             )
             _still(page, shots["mid"], unlike=shots["start"])
 
-            page.get_by_role("slider").focus()
+            page.get_by_role("slider").first.focus()
             page.keyboard.press("End")
             _until(lambda: viewer.playhead >= duration, "End did not take the plan to its end")
             _still(page, shots["end"], unlike=shots["mid"])
+
+            # The GUI's toggles hide a layer and show it again; the camera buttons frame the
+            # scene and put the camera back where it started.
+            page.get_by_text("grasps ghosts").click()
+            _until(lambda: viewer.layers.get("grasps") is False, "the grasps were not hidden")
+            page.get_by_text("grasps ghosts").click()
+            _until(lambda: viewer.layers.get("grasps") is True, "the grasps were not shown")
+            home = viewer.cameras()
+            page.get_by_role("button", name="Frame the scene").click()
+            _until(lambda: viewer.cameras() != home, "Frame the scene did not move the camera")
+            page.get_by_role("button", name="Reset the camera").click()
+            start = viewer._home
+            assert start is not None
+            _until(
+                lambda: all(np.allclose(c[0], start[0], atol=1e-3) for c in viewer.cameras()),
+                "Reset the camera did not put it back",
+            )
         finally:
             browser.close()
     image = iio.imread(shots["start"])
