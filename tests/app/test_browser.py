@@ -183,9 +183,10 @@ def _launch(page: Any, scene: str, planner: str, budget: str = "120") -> str:
 
 
 def _wait_finished(page: Any, run_id: str) -> None:
-    """Until the page shows run ``run_id``, no longer live (its last event arrived)."""
+    """Until the page shows run ``run_id`` whole: its last event arrived (the page read it in
+    bulk when it was over, or followed it live to its end)."""
     page.wait_for_function(
-        "id => window.dashboard.state().runId === id && !window.dashboard.state().live",
+        "id => window.dashboard.state().runId === id && window.dashboard.state().done",
         arg=run_id,
         timeout=RUN_TIMEOUT_MS,
     )
