@@ -281,9 +281,9 @@ async def stream(
 async def _send_stored(websocket: WebSocket, dash: Dashboard, run_id: str, after: int) -> int:
     last = after
     async for chunk in reads.event_chunks(dash.reads, dash.store, run_id, after, None):
-        for seq, text in chunk:
+        for text in chunk.texts:
             await websocket.send_text(text)
-            last = seq
+        last = chunk.last
     return last
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
 import math
 import sys
@@ -112,6 +113,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             )
         app.state.dashboard = Dashboard(settings, viewer=viewer, viewer_gate=gate)
         await asyncio.to_thread(app.state.dashboard.warm_up)
+        # What start-up made (domains, models, torch, the routes) lives as long as the server:
+        # out of the garbage collector's sight, a collection during a burst of requests walks
+        # only what the requests made.
+        gc.freeze()
         try:
             yield
         finally:

@@ -118,6 +118,7 @@ class EventPage(BaseModel):
     events: list[dict[str, Any]]
     next_after: int
     done: bool
+    last_seq: int = Field(description="the run's last stored seq when the page was read")
 
 
 class SceneOut(BaseModel):

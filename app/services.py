@@ -151,11 +151,7 @@ class Dashboard:
         return self.store.get_run(run_id)
 
     def query_counts(self, run_id: str) -> dict[str, dict[str, int]]:
-        counts: dict[str, dict[str, int]] = {}
-        for q in self.store.query_outcomes([run_id]):  # without inputs and contexts
-            entry = counts.setdefault(q.stream, {"ok": 0, "failed": 0})
-            entry["ok" if q.success else "failed"] += 1
-        return counts
+        return self.store.query_counts(run_id)
 
     def reports(self) -> list[dict[str, Any]]:
         if not self.reports_dir.is_dir():

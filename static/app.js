@@ -31,7 +31,7 @@ const CHART_DELAY_MS = 250; // charts follow the step at most this often
 const RECONNECT_MS = [1000, 2000, 5000, 10000]; // waits before reconnecting a dropped stream
 const PAGE = 50; // runs per page of the list
 const EVENT_PAGE = 5000; // events per page of a stored run (the route's most)
-const PAGES_AT_ONCE = 3; // pages of a stored run asked for at once
+const PAGES_AT_ONCE = 4; // pages of a stored run asked for at once (the server reads 4 at once)
 const SEARCH_MOST = 5000; // matches of a search kept
 const SIDE_BY_SIDE_PX = 1500; // from this width the 3D view stands beside the tree by default
 const PLAY_ICON = '<svg viewBox="0 0 16 16" aria-hidden="true"><path d="M4 2.5v11l9-5.5z"/></svg>';
@@ -358,6 +358,7 @@ function newRunState(id, detail = null) {
     loading: null, // {got, of}: stored events being read
     lastArrival: performance.now(), // when the newest event came (the skeleton clock)
     pickedSeen: undefined, // the 3D view's ghost clicks already seen (the first poll sets it)
+    marks: { selected: performance.now() }, // when each part of opening it was done (ms)
   };
 }
 
@@ -399,23 +400,40 @@ async function selectRun(id, run = null) {
     else row.removeAttribute("aria-current");
   }
   scheduleViewer();
-  let detail;
+  // The run and its first page of events are asked for at once; the first page says how many
+  // there are, so the others are asked for without waiting for the run.
+  const detailAnswer = api(`/api/runs/${encodeURIComponent(id)}`);
+  detailAnswer.then(
+    (detail) => {
+      if (!current()) return;
+      state.detail = detail;
+      state.marks.detail = performance.now();
+      renderHeader();
+      scheduleCharts();
+    },
+    (err) => {
+      if (!current()) return;
+      el.header.innerHTML = `<span class="error-text">Run ${escapeHtml(id)}: ${escapeHtml(err.message)}</span>`;
+    },
+  );
+  let first;
   try {
-    detail = await api(`/api/runs/${encodeURIComponent(id)}`);
+    first = await eventPage(id, -1);
   } catch (err) {
     if (!current()) return;
-    el.header.innerHTML = `<span class="error-text">Run ${escapeHtml(id)}: ${escapeHtml(err.message)}</span>`;
-    state.done = true; // no such run (or no server): nothing will come
-    updateStep();
-    return;
+    if (err.status === 404) {
+      state.done = true; // no such run: nothing will come (the detail's answer says so)
+      updateStep();
+      return;
+    }
+    first = null;
   }
   if (!current()) return;
-  state.detail = detail;
-  renderHeader();
   let last;
   let done;
   try {
-    ({ last, done } = await loadStored(state, detail.last_seq));
+    if (first === null) throw new ApiError(0, "cannot read its events");
+    ({ last, done } = await loadStored(state, first));
   } catch (err) {
     if (!current()) return;
     el.header.insertAdjacentHTML("beforeend", `<span class="error-text">Cannot read its events: ${escapeHtml(err.message)}</span>`);
@@ -433,41 +451,55 @@ async function selectRun(id, run = null) {
   openStream(mine, last); // still going: the rest comes over the websocket
 }
 
+/** One page of a run's stored events (GET /api/runs/{id}/events), parsed as it arrives. */
+async function eventPage(id, after) {
+  const response = await fetch(`/api/runs/${encodeURIComponent(id)}/events?after=${after}&limit=${EVENT_PAGE}`, {
+    headers: { Accept: "application/json" },
+  });
+  if (!response.ok) throw new ApiError(response.status, `${response.status}: cannot read events`);
+  return response.json();
+}
+
 /**
- * Read the run's stored events in pages (PAGES_AT_ONCE at once: a run's seqs have no gaps, so
- * page k starts after seq k * EVENT_PAGE - 1; with gaps pages overlap and ``append`` drops the
- * repeats), fold them and draw the last step. Returns the last seq read and whether the run is
- * over with nothing after it.
+ * Read the run's stored events in pages (``first``, page 0, says the last seq; then
+ * PAGES_AT_ONCE at once: a run's seqs have no gaps, so page k starts after seq
+ * k * EVENT_PAGE - 1; with gaps pages overlap and ``append`` drops the repeats), fold them and
+ * draw the last step. Returns the last seq read and whether the run is over with nothing
+ * after it.
  */
-async function loadStored(state, lastSeq) {
-  const id = encodeURIComponent(state.id);
+async function loadStored(state, first) {
+  const lastSeq = first.last_seq;
   const pages = Math.max(1, Math.ceil((lastSeq + 1) / EVENT_PAGE));
-  state.loading = { got: 0, of: lastSeq + 1 };
+  state.loading = { got: first.events.length, of: lastSeq + 1 };
   renderEmpty();
   const got = new Array(pages);
-  let next = 0;
+  got[0] = first;
+  let next = 1;
   const worker = async () => {
     while (next < pages && app.run === state) {
       const k = next++;
-      got[k] = await api(`/api/runs/${id}/events?after=${k * EVENT_PAGE - 1}&limit=${EVENT_PAGE}`);
+      got[k] = await eventPage(state.id, k * EVENT_PAGE - 1);
       state.loading.got += got[k].events.length;
       renderEmpty();
     }
   };
-  await Promise.all(Array.from({ length: Math.min(PAGES_AT_ONCE, pages) }, worker));
+  await Promise.all(Array.from({ length: Math.min(PAGES_AT_ONCE, pages - 1) }, worker));
   if (app.run !== state) return { last: -1, done: false };
+  state.marks.read = performance.now();
   for (const page of got) app.replay.append(page.events);
   let tail = got[pages - 1];
   // A live run (or a full last page) may have more: read on from the last seq.
   while (!tail.done && tail.events.length === EVENT_PAGE) {
-    tail = await api(`/api/runs/${id}/events?after=${tail.next_after}&limit=${EVENT_PAGE}`);
+    tail = await eventPage(state.id, tail.next_after);
     if (app.run !== state) return { last: -1, done: false };
     app.replay.append(tail.events);
   }
   state.loading = null;
   state.lastArrival = performance.now();
   if (app.follow) app.replay.goTo(app.replay.last);
-  view.requestDraw();
+  state.marks.folded = performance.now();
+  view.draw();
+  state.marks.drawn = performance.now();
   updateStep();
   const last = app.replay.events.length ? app.replay.events.at(-1).seq : -1;
   return { last, done: tail.done };
@@ -1434,6 +1466,9 @@ window.dashboard = {
    * body waits for the debounce. */
   viewerSync: () => ({ pending: viewerPending !== "", sent: viewerSent === "" ? null : JSON.parse(viewerSent) }),
   showPicked,
+  /** When each part of opening the run was done (ms since the page's start): selected,
+   * detail (GET /api/runs/{id}), read (every stored event), folded, drawn. */
+  timings: () => ({ ...(app.run?.marks ?? {}) }),
   /** Search the tree as the search box does (and show the first match); the matches' ids. */
   search(text) {
     el.searchInput.value = text;
@@ -1497,8 +1532,16 @@ loadForm();
 loadReports();
 updateStep();
 drawCharts();
-refresh().then(() => {
-  route();
-  window.addEventListener("hashchange", route);
-  pollPicked();
+/** Show the page the address names; the pages of charts (compare, benchmarks, models) once
+ * plotly has loaded, a run at once (its charts are drawn again when plotly is there). */
+function go() {
+  if (/^#?(run=|$)/.test(location.hash)) route();
+  else window.plotlyReady.then(route);
+}
+
+go(); // a run in the address is opened at once, beside the list's first read
+window.addEventListener("hashchange", go);
+window.plotlyReady.then(() => {
+  if (currentPage === "runs") drawCharts();
 });
+refresh().then(() => pollPicked());

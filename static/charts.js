@@ -20,7 +20,9 @@ function ready(el) {
     return true;
   }
   el.dataset.state = "unavailable";
-  el.textContent = "Charts unavailable: /vendor/plotly.min.js did not load.";
+  el.textContent = document.readyState === "complete"
+    ? "Charts unavailable: /vendor/plotly.min.js did not load."
+    : "Loading the charts…";
   return false;
 }
 

@@ -730,6 +730,21 @@ class RunStore:
         with Session(self.engine) as session:
             return [QueryRecord.from_row(r) for r in session.scalars(query)]
 
+    def query_counts(self, run_id: str) -> dict[str, dict[str, int]]:
+        """The run's queries a sampler answered, per stream: ``{stream: {"ok", "failed"}}``,
+        counted by the database (a run of 50,000 queries is not read row by row)."""
+        query = (
+            select(QueryRow.stream, QueryRow.success, func.count())
+            .where(QueryRow.run_id == run_id)
+            .group_by(QueryRow.stream, QueryRow.success)
+        )
+        out: dict[str, dict[str, int]] = {}
+        with self.engine.connect() as conn:
+            for stream, success, n in conn.execute(query):
+                entry = out.setdefault(str(stream), {"ok": 0, "failed": 0})
+                entry["ok" if success else "failed"] += int(n)
+        return dict(sorted(out.items()))
+
     def query_outcomes(self, run_ids: list[str]) -> list[QueryOutcome]:
         """How each stream query of some runs ended, without its inputs and context (cheap to
         read for a whole benchmark), in the order stored."""
