@@ -45,6 +45,12 @@ STEP_TARGET_MS = 50.0
 PAGE = 5000
 
 
+def cpu_s(pid: int) -> float:
+    """CPU seconds (user + system) the process has used."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def record(db: Path, nodes: int, seed: int) -> tuple[str, int, int]:
     """The synthetic run in the store: its id, events and bytes of their JSON."""
     synth = Synth(nodes, seed)
@@ -94,6 +100,7 @@ def main() -> int:
                 page_s.append(time.perf_counter() - t0)
             opened: list[float] = []
             marks: list[dict[str, float]] = []
+            server_cpu: list[float] = []
             forward: list[float] = []
             back: list[float] = []
             with sync_playwright() as pw:
@@ -109,6 +116,7 @@ def main() -> int:
                 rng = random.Random(args.seed)
                 for _ in range(args.repeats):
                     page.goto("about:blank")
+                    before = cpu_s(server.pid)
                     page.goto(f"{url}/#run={run_id}")
                     page.wait_for_function(
                         "([id, last]) => { const s = window.dashboard?.state();"
@@ -122,6 +130,7 @@ def main() -> int:
                             " setTimeout(() => ok(performance.now()), 0)))"
                         )
                     )
+                    server_cpu.append(cpu_s(server.pid) - before)
                     marks.append(page.evaluate("window.dashboard.timings?.() ?? {}"))
                     state = page.evaluate("window.dashboard.state()")
                     assert not state["live"] and state["step"] == n_events - 1, state
@@ -162,7 +171,8 @@ def main() -> int:
             f"{name} {statistics.median(m.get(name, float('nan')) for m in marks):.0f}"
             for name in ("selected", "detail", "read", "folded", "drawn")
         )
-        + f", painted {statistics.median(opened):.0f}"
+        + f", painted {statistics.median(opened):.0f}; the server's CPU seconds for it (the page,"
+        f" the run and every page of its events): median {statistics.median(server_cpu):.2f}"
     )
     print(f"\n    {shlex.join([Path(sys.executable).name, *sys.argv])}")
     return 0

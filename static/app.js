@@ -38,6 +38,7 @@ const PLAY_ICON = '<svg viewBox="0 0 16 16" aria-hidden="true"><path d="M4 2.5v1
 const PAUSE_ICON = '<svg viewBox="0 0 16 16" aria-hidden="true"><path d="M4 3h3v10H4zM9 3h3v10H9z"/></svg>';
 
 const $ = (id) => document.getElementById(id);
+let plotlyAsked = false; // loadPlotly was called
 
 const el = {
   health: $("health"),
@@ -359,6 +360,7 @@ function newRunState(id, detail = null) {
     lastArrival: performance.now(), // when the newest event came (the skeleton clock)
     pickedSeen: undefined, // the 3D view's ghost clicks already seen (the first poll sets it)
     marks: { selected: performance.now() }, // when each part of opening it was done (ms)
+    opening: id !== null, // its stored events are being read (plotly waits until they are)
   };
 }
 
@@ -423,7 +425,9 @@ async function selectRun(id, run = null) {
     if (!current()) return;
     if (err.status === 404) {
       state.done = true; // no such run: nothing will come (the detail's answer says so)
+      state.opening = false;
       updateStep();
+      scheduleCharts();
       return;
     }
     first = null;
@@ -442,12 +446,14 @@ async function selectRun(id, run = null) {
     last = app.replay.events.length ? app.replay.events.at(-1).seq : -1;
   }
   if (!current()) return;
+  state.opening = false;
   if (done) {
     state.done = true; // a finished run: everything is here, nothing is live
     updateStep();
     scheduleCharts();
     return;
   }
+  scheduleCharts();
   openStream(mine, last); // still going: the rest comes over the websocket
 }
 
@@ -1215,6 +1221,7 @@ function scheduleCharts() {
 }
 
 function drawCharts() {
+  if (!window.Plotly && !app.run?.opening) loadPlotly();
   if (app.run === null) {
     clearChart(el.chartQueries, "Queries per stream: select a run.");
     clearChart(el.chartTime, "Time split: select a run.");
@@ -1536,7 +1543,25 @@ drawCharts();
  * plotly has loaded, a run at once (its charts are drawn again when plotly is there). */
 function go() {
   if (/^#?(run=|$)/.test(location.hash)) route();
-  else window.plotlyReady.then(route);
+  else {
+    loadPlotly();
+    window.plotlyReady.then(route);
+  }
+}
+
+/** Load plotly (once): the pages of charts ask at once, the run page once its run is drawn
+ * (its 3.5 MB took the page's thread while a big run's events were read and folded). */
+function loadPlotly() {
+  if (plotlyAsked) return;
+  plotlyAsked = true;
+  const script = document.createElement("script");
+  script.src = "/vendor/plotly.min.js";
+  script.onload = () => window.plotlyLoaded();
+  script.onerror = () => {
+    window.plotlyFailed = true;
+    window.plotlyLoaded();
+  };
+  document.head.append(script);
 }
 
 go(); // a run in the address is opened at once, beside the list's first read
@@ -1544,4 +1569,5 @@ window.addEventListener("hashchange", go);
 window.plotlyReady.then(() => {
   if (currentPage === "runs") drawCharts();
 });
+setTimeout(loadPlotly, 5000); // in any case, soon
 refresh().then(() => pollPicked());

@@ -1,5 +1,6 @@
 // Plotly charts of the selected run at the current step. Plotly is a classic script served by
-// the app at /vendor/plotly.min.js (window.Plotly); without it the charts say so.
+// the app at /vendor/plotly.min.js (window.Plotly), loaded by app.js once a run is drawn; until
+// then the charts say they are loading, and without it that they are unavailable.
 
 import { QUERY_KIND_RGB, QUERY_KIND_TEXT, QUERY_KINDS } from "/generated/definitions.js";
 
@@ -20,7 +21,7 @@ function ready(el) {
     return true;
   }
   el.dataset.state = "unavailable";
-  el.textContent = document.readyState === "complete"
+  el.textContent = window.plotlyFailed
     ? "Charts unavailable: /vendor/plotly.min.js did not load."
     : "Loading the charts…";
   return false;
