@@ -382,10 +382,10 @@ def test_the_view_renders_in_a_browser_and_plays(
             page.get_by_role("button", name="Frame the scene").click()
             _until(lambda: viewer.cameras() != home, "Frame the scene did not move the camera")
             page.get_by_role("button", name="Reset the camera").click()
-            start = viewer._home
-            assert start is not None
+            home_view = viewer._home
+            assert home_view is not None
             _until(
-                lambda: all(np.allclose(c[0], start[0], atol=1e-3) for c in viewer.cameras()),
+                lambda: all(np.allclose(c[0], home_view[0], atol=1e-3) for c in viewer.cameras()),
                 "Reset the camera did not put it back",
             )
         finally:
@@ -670,3 +670,27 @@ def test_the_view_names_no_address_of_its_own(capfd: pytest.CaptureFixture[str])
     out, err = capfd.readouterr()
     assert port not in out and port not in err
     assert "viser" not in out.lower()
+
+
+def test_skeletons_arriving_during_the_search_are_drawn(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    """The skeleton source's progress and a later batch of skeletons (with its plan node under
+    the root) are folded like any event: nothing skipped, the new plan node in the tree."""
+    events = kitchen_run[0]
+    base = {"run_id": events[0]["run_id"], "t": events[-1]["t"]}
+    extra = [
+        {"type": "skeleton_progress", "seq": 10**6, "phase": "replan", "message": "m",
+         "seconds": 0.1, **base},
+        {"type": "skeletons_added", "seq": 10**6 + 1, "seconds": 0.2, "reason": "more",
+         "learned": [], "plans": [{"index": 99, "cost": 1.0, "actions": [], "streams": []}],
+         **base},
+        {"type": "node_added", "seq": 10**6 + 2, "node_id": 10**5, "parent_id": 0,
+         "plan_index": 99, "depth": 0, "stream": None, "success": True, "outputs": [],
+         "label": "plan 99", **base},
+    ]  # fmt: skip
+    viewer.show("kitchen-1", 0, events[:-2] + extra, None, run_id="run-skeletons")
+    counts = viewer.counts
+    assert counts["skipped"] == 0 and counts["events"] == len(events) - 2 + len(extra)
+    nodes = sum(1 for e in events[:-2] if e["type"] == "node_added")
+    assert counts["nodes"] == nodes + 2  # the root, and the new plan node
