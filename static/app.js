@@ -17,7 +17,7 @@ import { ApiError, api, streamUrl } from "./api.js";
 import { BenchPage } from "./benchmarks.js";
 import { clearChart, drawQueries, drawTime } from "./charts.js";
 import { CompareView } from "./compare.js";
-import { escapeHtml, num, seconds, value, when } from "./format.js";
+import { count, escapeHtml, num, seconds, value, when } from "./format.js";
 import { ModelsPage } from "./models.js";
 import { Replay } from "./tree.js";
 import { TreeView, nodeText, qGradient, qRgbAt, shortLabel } from "./treeview.js";
@@ -593,9 +593,9 @@ function isLive() {
 function headerQueries(d) {
   const tree = app.replay.tree;
   const over = d && !LIVE.has(d.status) && app.run.done;
-  const reused = tree.reused ? ` <span class="muted">(+${tree.reused.toLocaleString()} reused)</span>` : "";
-  if (over) return `<b data-testid="header-queries">${(d.queries ?? 0).toLocaleString()}</b> queries${reused}`;
-  return `<b data-testid="header-queries">${tree.sampled.toLocaleString()}</b> queries so far${reused}`;
+  const reused = tree.reused ? ` <span class="muted">(+${count(tree.reused)} reused)</span>` : "";
+  if (over) return `<b data-testid="header-queries">${count(d.queries ?? 0)}</b> queries${reused}`;
+  return `<b data-testid="header-queries">${count(tree.sampled)}</b> queries so far${reused}`;
 }
 
 function renderHeader() {
@@ -719,8 +719,8 @@ function updateStep() {
   el.liveBadge.textContent = app.follow ? "● live" : "● live run (last event button follows it)";
   el.liveBadge.classList.toggle("paused", !app.follow);
   const n = tree.nodeCount;
-  const failed = tree.failed ? ` · ${tree.failed.toLocaleString()} failed` : "";
-  el.nodeCount.textContent = `${n.toLocaleString()} node${n === 1 ? "" : "s"}${failed}`;
+  const failed = tree.failed ? ` · ${count(tree.failed)} failed` : "";
+  el.nodeCount.textContent = `${count(n)} node${n === 1 ? "" : "s"}${failed}`;
   el.nodeCount.dataset.nodes = String(n);
   el.stepEvent.textContent = step >= 0 ? describe(replay.events[step]) : "";
   if (app.search.text && app.search.size !== tree.order.length) runSearch(app.search.text, false);
@@ -761,7 +761,7 @@ function renderEmpty() {
   if (run === null) text = "No run selected.";
   else if (run.loading) {
     const { got, of } = run.loading;
-    text = `Loading ${got.toLocaleString()} of ${of.toLocaleString()} events…`;
+    text = `Loading ${count(got)} of ${count(of)} events…`;
   } else if (tree.nodeCount === 0) {
     const planner = run.detail?.planner ?? tree.run?.planner;
     if (planner === "sequential") {
@@ -803,7 +803,7 @@ function renderLegend() {
   el.qLegend.dataset.lo = String(range.lo);
   el.qLegend.dataset.hi = String(range.hi);
   const node = app.selectedId === null ? undefined : tree.byId.get(app.selectedId);
-  const q = node === undefined ? null : tree.effectiveQ().get(node.id) ?? null;
+  const q = node === undefined ? null : tree.qOf(node);
   el.qMark.hidden = q === null;
   el.qSelected.hidden = q === null;
   if (q === null) {
@@ -1145,7 +1145,7 @@ function thisQuery(node, query, noModels) {
 function nextQuery(node, tree, noModels) {
   const p = node.pred;
   if (!p) {
-    const q = tree.effectiveQ().get(node.id);
+    const q = tree.qOf(node);
     const from = tree.predictedAncestor(node);
     const inherited = q !== null && q !== undefined && from
       ? ` Coloured by #${from.id}'s Q, ${seconds(q)}: the cost expected when the search went down this branch.`
@@ -1196,7 +1196,7 @@ function showTooltip(hit, e) {
   } else {
     const node = hit;
     const tree = app.replay.tree;
-    const q = tree.effectiveQ().get(node.id);
+    const q = tree.qOf(node);
     const own = node.pred !== null;
     const qText = q !== null && q !== undefined ? ` · Q ${seconds(q)}${own ? "" : " (an ancestor's)"}` : "";
     const fail = node.parent !== null && node.stream !== null && !node.success ? " · failed" : "";
@@ -1320,10 +1320,10 @@ async function pollPicked() {
       const picked = shown.picked;
       if (app.run === run) {
         const mine = picked && picked.run_id === run.id && shown.run_id === run.id;
-        const count = mine ? picked.count : 0;
-        if (run.pickedSeen === undefined) run.pickedSeen = count;
-        else if (mine && count !== run.pickedSeen) {
-          run.pickedSeen = count;
+        const clicks = mine ? picked.count : 0;
+        if (run.pickedSeen === undefined) run.pickedSeen = clicks;
+        else if (mine && clicks !== run.pickedSeen) {
+          run.pickedSeen = clicks;
           showPicked(picked);
         }
       }

@@ -336,21 +336,24 @@ export class SearchTree {
 
   /**
    * Each node's Q for colouring (planner/figures.py): its own prediction's, else its nearest
-   * predicted ancestor's, else null. Parents come before their children in ``order``, so one
-   * pass does it; kept until a prediction or the tree changes.
+   * predicted ancestor's, else null, as ``node.effQ``. Parents come before their children in
+   * ``order``, so one pass does it; done again only when a prediction or the tree changed.
    */
   effectiveQ() {
     const key = `${this.predVersion}:${this.order.length}`;
-    if (this._eff && this._effKey === key) return this._eff;
-    const eff = new Map();
+    if (this._effKey === key) return;
     for (const node of this.order) {
       let q = node.pred !== null ? node.pred.q : null;
-      if (q === null && Q_INHERITED && node.parent !== null) q = eff.get(node.parent.id) ?? null;
-      eff.set(node.id, q);
+      if (q === null && Q_INHERITED && node.parent !== null) q = node.parent.effQ;
+      node.effQ = q;
     }
-    this._eff = eff;
     this._effKey = key;
-    return eff;
+  }
+
+  /** Node ``node``'s Q for colouring (see effectiveQ), or null. */
+  qOf(node) {
+    this.effectiveQ();
+    return node.effQ;
   }
 
   /** The nearest ancestor of ``node`` with a prediction of its own (null: none). */
@@ -398,6 +401,7 @@ function makeNode(
     outputLabels: valueLabels ?? [], // the domain's one-line labels of the outputs, if any
     label: label ?? "",
     pred: null, // the latest model_prediction event
+    effQ: null, // the Q it is coloured by (SearchTree.effectiveQ)
     visit: null, // the latest node_visited event
     x: 0,
     fan: null, // this node's folded failed leaves, after layout

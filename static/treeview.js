@@ -7,6 +7,7 @@
 // one fan ("✕ 12"), opened by a click. Colours are planner/figures.py's scale of Q.
 
 import { NO_PREDICTION_RGB, Q_PERCENTILES, Q_STOPS } from "/generated/definitions.js";
+import { count } from "./format.js";
 
 const BUCKETS = 12; // colour steps between the lowest and the highest predicted Q
 const GREY = rgb(NO_PREDICTION_RGB); // no prediction
@@ -80,6 +81,7 @@ export class TreeView {
     this.matches = new Set(); // node ids the search found, ringed
     this._frame = 0;
     this._buckets = Array.from({ length: BUCKETS + 1 }, () => []);
+    this._rowText = new Map(); // a row label's text fitted to the gutter, by what it says
     this._bind();
   }
 
@@ -112,8 +114,10 @@ export class TreeView {
 
   _size() {
     const dpr = window.devicePixelRatio || 1;
-    const w = this.canvas.clientWidth;
-    const h = this.canvas.clientHeight;
+    // The size the ResizeObserver last saw (reading clientWidth after the page changed text
+    // forced a layout of the whole page on every step).
+    if (this._box === undefined) this._box = { w: this.canvas.clientWidth, h: this.canvas.clientHeight };
+    const { w, h } = this._box;
     if (this.canvas.width !== Math.round(w * dpr) || this.canvas.height !== Math.round(h * dpr)) {
       this.canvas.width = Math.round(w * dpr);
       this.canvas.height = Math.round(h * dpr);
@@ -211,7 +215,7 @@ export class TreeView {
     this.qRange = range;
     const lo = range?.lo ?? 0;
     const scale = range && range.hi > range.lo ? (BUCKETS - 1) / (range.hi - range.lo) : 0;
-    const eff = range ? tree.effectiveQ() : null;
+    if (range) tree.effectiveQ();
 
     // Nodes batched by colour bucket (index BUCKETS = grey).
     const buckets = this._buckets;
@@ -227,8 +231,8 @@ export class TreeView {
       const y = ty + node.level * sy;
       if (y < y0 || y > y1) continue;
       let b = BUCKETS;
-      const q = eff === null ? null : eff.get(node.id);
-      if (q !== null && q !== undefined) {
+      const q = range ? node.effQ : null;
+      if (q !== null) {
         b = Math.round((q - lo) * scale);
         b = b < 0 ? 0 : b > BUCKETS - 1 ? BUCKETS - 1 : b;
       }
@@ -311,7 +315,7 @@ export class TreeView {
       ctx.textAlign = "center";
       ctx.textBaseline = "top";
       ctx.fillStyle = FAILED;
-      for (const [x, y, count] of shown.slice(0, 3000)) ctx.fillText(`✕${count}`, x, y + d + 2);
+      for (const [x, y, n] of shown.slice(0, 3000)) ctx.fillText(`✕${n}`, x, y + d + 2);
     }
   }
 
@@ -361,7 +365,7 @@ export class TreeView {
       let row = rows.get(node.level);
       if (row === undefined) rows.set(node.level, (row = []));
       row.push(node);
-      if (++seen > 8000) return; // too many on screen to read any label
+      if (++seen > 3000) return; // too many on screen to read any label
     }
     ctx.font = "11px system-ui, sans-serif";
     ctx.textAlign = "left";
@@ -404,26 +408,35 @@ export class TreeView {
     ctx.textAlign = "right";
     ctx.textBaseline = "middle";
     const numbered = gw >= 150; // "3. ik": the plan's third stream, where there is room
+    const twoLines = sy >= 26;
     this.rowsDrawn = [];
+    ctx.font = "11px system-ui, sans-serif"; // set once: a font is parsed each time it is set
+    ctx.fillStyle = "#374151";
     for (let level = 0; level < tree.rows.length; level += every) {
       const y = ty + level * sy;
       if (y < -6 || y > h + 6) continue;
       const row = tree.rows[level];
       if (!row || row.length === 0) continue;
-      const [name, count] = row[0];
+      const [name, most] = row[0];
       const more = row.length > 1 ? ` +${row.length - 1}` : "";
-      ctx.font = "11px system-ui, sans-serif";
       const lead = numbered && level >= 2 ? `${level - 1}. ` : "";
-      const text = fitText(ctx, lead + name, gw - 10 - ctx.measureText(more).width) + more;
-      ctx.fillStyle = "#374151";
-      ctx.fillText(text, gw - 6, y - (sy >= 26 ? 6 : 0));
-      if (sy >= 26) {
-        ctx.font = "10px system-ui, sans-serif";
-        ctx.fillStyle = "#6b7280";
-        const total = row.reduce((a, [, c]) => a + c, 0);
-        ctx.fillText(`${total.toLocaleString()} node${total === 1 ? "" : "s"}`, gw - 6, y + 7);
+      const memo = `${gw}|${lead}${name}|${more}`;
+      let text = this._rowText.get(memo);
+      if (text === undefined) {
+        text = fitText(ctx, lead + name, gw - 10 - ctx.measureText(more).width) + more;
+        if (this._rowText.size > 5000) this._rowText.clear();
+        this._rowText.set(memo, text);
       }
-      this.rowsDrawn.push({ level, y, text, name, count });
+      ctx.fillText(text, gw - 6, y - (twoLines ? 6 : 0));
+      this.rowsDrawn.push({ level, y, text, name, count: most, row });
+    }
+    if (twoLines) {
+      ctx.font = "10px system-ui, sans-serif";
+      ctx.fillStyle = "#6b7280";
+      for (const { y, row } of this.rowsDrawn) {
+        const total = row.reduce((a, [, c]) => a + c, 0);
+        ctx.fillText(`${count(total)} node${total === 1 ? "" : "s"}`, gw - 6, y + 7);
+      }
     }
   }
 
@@ -531,7 +544,11 @@ export class TreeView {
       { passive: false },
     );
     canvas.addEventListener("dblclick", () => this.fit());
-    new ResizeObserver(() => this.requestDraw()).observe(canvas);
+    new ResizeObserver((entries) => {
+      const box = entries.at(-1).contentRect;
+      this._box = { w: box.width, h: box.height };
+      this.requestDraw();
+    }).observe(canvas);
   }
 
   /** Zoom by ``factor`` around a CSS-pixel point; levels stop growing at a readable height. */
