@@ -16,7 +16,9 @@ from fastapi import (
     WebSocketDisconnect,
 )
 from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import Response, StreamingResponse
 
+from app import reads
 from app.deps import COMMON_RESPONSES, ERROR, RunId, bad_field, get_dashboard, not_found
 from app.errors import RequestError
 from app.hub import Ended, Lagged
@@ -40,14 +42,13 @@ from app.schemas import (
     ViewerState,
 )
 from app.services import Dashboard
-from planner.events import event_to_json
 from planner.store import LIVE_STATUSES
 
 log = logging.getLogger(__name__)
 
 router = APIRouter(prefix="/api", responses=COMMON_RESPONSES)
 
-WS_PAGE = 1000  # stored events read per page when a websocket catches up
+MAX_PAGE = 5000  # events in one page of GET /api/runs/{id}/events
 
 
 def _dash(request: Request) -> Dashboard:
@@ -59,7 +60,8 @@ def _unknown_run(run_id: str) -> HTTPException:
 
 
 @router.get("/health")
-def health(request: Request) -> Health:
+async def health(request: Request) -> Health:
+    """On the event loop: it answers however busy the thread pool is."""
     dash = _dash(request)
     running, queued = dash.manager.counts()
     return Health(
@@ -149,19 +151,26 @@ def get_run(run_id: RunId, request: Request) -> RunDetail:
     )
 
 
-@router.get("/runs/{run_id}/events", responses={404: ERROR})
-def get_events(
+@router.get(
+    "/runs/{run_id}/events",
+    response_model=EventPage,
+    responses={200: {"model": EventPage}, 404: ERROR},
+)
+async def get_events(
     run_id: RunId,
     request: Request,
     after: Annotated[int, Query(ge=-1, le=MAX_SEQ)] = -1,
-    limit: Annotated[int, Query(ge=1, le=5000)] = 1000,
-) -> EventPage:
+    limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 1000,
+) -> Response:
+    """Stored events with ``seq > after`` (only stored ones are ever served), streamed in
+    chunks each read in its turn (:mod:`app.reads`); ``done``: the run is over and nothing
+    comes after them."""
+    page = reads.EventPage(_dash(request).reads, _dash(request).store, run_id, after, limit)
     try:
-        events, done = _dash(request).events(run_id, after, limit)
+        await page.start()
     except KeyError as exc:
         raise _unknown_run(run_id) from exc
-    next_after = events[-1]["seq"] if events else after
-    return EventPage(events=events, next_after=next_after, done=done)
+    return StreamingResponse(page.body(), media_type="application/json")
 
 
 @router.delete(
@@ -198,6 +207,8 @@ def shown(request: Request) -> ViewerShown:
     dash = _dash(request)
     run_id, step, node = dash.viewer.shown or (None, None, None)
     picked = dash.viewer.picked()
+    if picked is not None and picked.run_id is not None and picked.run_id != run_id:
+        picked = None  # a click in the run shown before (the view is about to forget it)
     return ViewerShown(
         url=dash.viewer_url(request.headers.get("host")),
         run_id=run_id,
@@ -205,7 +216,9 @@ def shown(request: Request) -> ViewerShown:
         node=node,
         picked=None
         if picked is None
-        else Picked(node_id=picked.node_id, label=picked.label, count=picked.count),
+        else Picked(
+            node_id=picked.node_id, label=picked.label, count=picked.count, run_id=picked.run_id
+        ),
     )
 
 
@@ -267,14 +280,11 @@ async def stream(
 
 async def _send_stored(websocket: WebSocket, dash: Dashboard, run_id: str, after: int) -> int:
     last = after
-    while True:
-        page = await run_in_threadpool(dash.store.events, run_id, after=last, limit=WS_PAGE)
-        for event in page:
-            await websocket.send_text(event_to_json(event))
-        if page:
-            last = page[-1].seq
-        if len(page) < WS_PAGE:
-            return last
+    async for chunk in reads.event_chunks(dash.reads, dash.store, run_id, after, None):
+        for text in chunk.texts:
+            await websocket.send_text(text)
+        last = chunk.last
+    return last
 
 
 def _control(kind: str, **fields: Any) -> str:

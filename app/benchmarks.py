@@ -19,7 +19,7 @@ import multiprocessing
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import datetime
 from multiprocessing.connection import Connection
@@ -82,7 +82,11 @@ class _Worker:
 
 
 def _info(
-    record: BenchRecord, counts: dict[str, dict[str, int]], runner: str | None, message: str
+    record: BenchRecord,
+    counts: dict[str, dict[str, int]],
+    runner: str | None,
+    message: str,
+    model_names: Mapping[str, str] | None = None,
 ) -> BenchInfo:
     config = record.config
     planners = [str(p) for p in config.get("planners", [])]
@@ -100,7 +104,7 @@ def _info(
         seed_first=min(seeds) if seeds else 0,
         seed_last=max(seeds) if seeds else 0,
         budget_s=float(config.get("budget_s", 0.0)),
-        model=Path(model).stem if isinstance(model, str) else None,
+        model=_model_name(model, model_names or {}) if isinstance(model, str) else None,
         order=str(config.get("order", "auto")),
         status=record.status,
         created_at=record.created_at,
@@ -111,6 +115,17 @@ def _info(
         runner=runner,
         message=message,
     )
+
+
+def _model_name(path: str, names: Mapping[str, str]) -> str:
+    """The name the models page offers the file at ``path`` by (a shipped model's is its
+    domain's: every domain's file is ``model.pt``, and "model model" said nothing), else its
+    file's stem."""
+    try:
+        resolved = str(Path(path).resolve())
+    except OSError:
+        resolved = path
+    return names.get(resolved, Path(path).stem)
 
 
 def _field_of(error: str) -> str:
@@ -162,7 +177,8 @@ class BenchService:
         """Every benchmark of the store, newest first: its record (the whole configuration)
         and what the list shows of it."""
         counts = self.store.bench_progress()
-        return [(r, self._with(r, counts.get(r.id, {}))) for r in self.store.list_benches()]
+        names = self._model_names()
+        return [(r, self._with(r, counts.get(r.id, {}), names)) for r in self.store.list_benches()]
 
     def list(self) -> list[BenchInfo]:
         """Every benchmark of the store, newest first, with its progress."""
@@ -199,7 +215,12 @@ class BenchService:
             tuple(sorted((p, v.done, v.solved) for p, v in info.progress.items())),
         )
 
-    def _with(self, record: BenchRecord, counts: dict[str, dict[str, int]]) -> BenchInfo:
+    def _with(
+        self,
+        record: BenchRecord,
+        counts: dict[str, dict[str, int]],
+        names: Mapping[str, str] | None = None,
+    ) -> BenchInfo:
         with self._lock:
             worker = self._workers.get(record.id)
             message = self._messages.get(record.id, "")
@@ -215,7 +236,15 @@ class BenchService:
                     message = "cancelling: the running trials are being stopped"
         elif record.status == "running" and is_alive(record.owner):
             runner = "elsewhere"
-        return _info(record, counts, runner, message)
+        return _info(record, counts, runner, message, names or self._model_names())
+
+    def _model_names(self) -> dict[str, str]:
+        """Model file (resolved) -> the name the page offers it by."""
+        try:
+            return {str(p.resolve()): name for name, p in self.models.files().items()}
+        except Exception:  # a domain that does not load: its files by their stems
+            log.exception("could not list the model files")
+            return {}
 
     # --- launching, cancelling, resuming -----------------------------------------------------
 

@@ -23,8 +23,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
+from planner import figures
 from planner.report import query_summary, run_time_split
 from planner.store import LIVE_STATUSES, QueryOutcome, RunRecord, RunStore
 
@@ -32,6 +31,7 @@ from planner.store import LIVE_STATUSES, QueryOutcome, RunRecord, RunStore
 # (RunStore.query_times), so the queries' events, half a tree's bytes, are not parsed.
 TREE_TYPES = (
     "abstract_plans_found",
+    "skeletons_added",
     "node_added",
     "model_prediction",
     "solution_found",
@@ -39,7 +39,6 @@ TREE_TYPES = (
 MAX_CURVE_POINTS = 1000  # points of a run's queries-against-seconds curve
 KEPT_TREES = 8  # finished runs' trees kept in memory
 KEPT_COMPARISONS = 8  # comparisons of two finished runs kept in memory
-Q_PERCENTILES = (2.0, 98.0)  # the shared colour scale spans these percentiles of Q
 
 
 @dataclass(frozen=True)
@@ -57,7 +56,7 @@ class Tree:
     q: list[float | None]  # the latest model prediction's Q; None without one
     labels: list[str]
     solution: int | None
-    plan_list: list[dict[str, Any]]  # abstract_plans_found's plans
+    plan_list: list[dict[str, Any]]  # abstract_plans_found's plans, then skeletons_added's
     query_t: list[float]  # t of each query a sampler answered (reused ones left out)
     plans_t: float = 0.0  # t of abstract_plans_found: the top-k planner's seconds
 
@@ -103,6 +102,8 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
         elif kind == "abstract_plans_found" and plans_t is None:
             plan_list = list(e.get("plans", []))
             plans_t = float(e["t"])
+        elif kind == "skeletons_added":  # more skeletons during the search, indices following
+            plan_list += list(e.get("plans", []))
     ids.insert(0, root)  # the root first: node i > 0 is the i-th node made
     return Tree(
         run_id=run_id,
@@ -323,12 +324,9 @@ def curve(tree: Tree, limit: int = MAX_CURVE_POINTS) -> dict[str, list[float]]:
 
 
 def q_scale(trees: Sequence[Tree]) -> tuple[float, float] | None:
-    """One colour scale for several trees: percentiles of every predicted Q in them."""
-    qs = np.array([q for tree in trees for q in tree.q if q is not None], dtype=np.float64)
-    if len(qs) == 0:
-        return None
-    lo, hi = np.percentile(qs, Q_PERCENTILES)
-    return float(lo), float(hi)
+    """One colour scale for several trees (:func:`planner.figures.q_scale` of every predicted
+    Q in them: the page's own scale, over both)."""
+    return figures.q_scale(q for tree in trees for q in tree.q if q is not None)
 
 
 def time_split(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
 import math
 import sys
@@ -13,7 +14,7 @@ from typing import Any
 
 from fastapi import FastAPI, HTTPException, Request, WebSocket
 from fastapi.exceptions import RequestValidationError, WebSocketRequestValidationError
-from fastapi.responses import FileResponse, JSONResponse
+from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
 from starlette.routing import Match, Route
@@ -25,6 +26,7 @@ from app.routes import benchmarks, compare, models
 from app.security import Access, Guard, Refusal, refusal_response
 from app.services import Dashboard
 from app.settings import WILDCARD_HOSTS, Settings
+from planner import figures
 
 log = logging.getLogger(__name__)
 
@@ -111,6 +113,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             )
         app.state.dashboard = Dashboard(settings, viewer=viewer, viewer_gate=gate)
         await asyncio.to_thread(app.state.dashboard.warm_up)
+        # What start-up made (domains, models, torch, the routes) lives as long as the server:
+        # out of the garbage collector's sight, a collection during a burst of requests walks
+        # only what the requests made.
+        gc.freeze()
         try:
             yield
         finally:
@@ -123,7 +129,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         lifespan=lifespan,
     )
     app.add_middleware(ReadCache, version=lambda: _store_version(app))
-    app.add_middleware(Guard, access=access, max_body_bytes=settings.max_body_bytes)  # outermost
+    app.add_middleware(  # outermost
+        Guard,
+        access=access,
+        max_body_bytes=settings.max_body_bytes,
+        max_json_items=settings.max_json_items,
+    )
 
     @app.exception_handler(RequestValidationError)
     async def bad_request(_request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -160,6 +171,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @app.get("/", include_in_schema=False)
     def index() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html")
+
+    definitions = figures.definitions_js()
+
+    @app.get("/generated/definitions.js", include_in_schema=False)
+    def shared_definitions() -> Response:
+        """planner/figures.py's definitions, as the page's module imports them."""
+        return Response(definitions, media_type="text/javascript")
 
     @app.get("/vendor/plotly.min.js", include_in_schema=False)
     def plotly() -> FileResponse:

@@ -118,6 +118,7 @@ class EventPage(BaseModel):
     events: list[dict[str, Any]]
     next_after: int
     done: bool
+    last_seq: int = Field(description="the run's last stored seq when the page was read")
 
 
 class SceneOut(BaseModel):
@@ -181,6 +182,7 @@ class Picked(BaseModel):
     node_id: int
     label: str
     count: int = Field(description="how many ghosts have been clicked so far (changes with each)")
+    run_id: str | None = Field(None, description="the run shown when it was clicked")
 
 
 class ViewerShown(BaseModel):

@@ -174,10 +174,13 @@ def _short(text: str, most: int = 60) -> str:
 class Guard:
     """ASGI middleware: :class:`Access`, the body limit and :data:`SECURITY_HEADERS`."""
 
-    def __init__(self, app: ASGIApp, *, access: Access, max_body_bytes: int) -> None:
+    def __init__(
+        self, app: ASGIApp, *, access: Access, max_body_bytes: int, max_json_items: int = 12_000
+    ) -> None:
         self.app = app
         self.access = access
         self.max_body_bytes = max_body_bytes
+        self.max_json_items = max_json_items
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] not in ("http", "websocket"):
@@ -203,10 +206,21 @@ class Guard:
         if too_large is not None:
             await _refuse(scope, receive, send, too_large)
             return
-        if "content-length" not in headers and "chunked" in headers.get("transfer-encoding", ""):
+        chunked = "chunked" in headers.get("transfer-encoding", "")
+        json_body = "json" in headers.get("content-type", "") and scope["method"] != "GET"
+        if ("content-length" not in headers and chunked) or json_body:
             body = await self._read_limited(receive)
             if body is None:
                 await _refuse(scope, receive, send, self._limit_refusal(None))
+                return
+            items = _json_items(body) if json_body else 0
+            if items > self.max_json_items:
+                refusal = Refusal(
+                    413,
+                    f"request body too large: about {items} JSON values (this server takes "
+                    f"{self.max_json_items})",
+                )
+                await _refuse(scope, receive, send, refusal)
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, _with_headers(send))
@@ -253,6 +267,13 @@ class Guard:
             chunks.append(chunk)
             if not message.get("more_body", False):
                 return b"".join(chunks)
+
+
+def _json_items(body: bytes) -> int:
+    """About how many values a JSON text holds (its commas and its opening brackets; commas in
+    strings count too, so never fewer): counted at C speed before it is parsed, since parsing
+    and validating 60,000 keys held the event loop for seconds."""
+    return body.count(b",") + body.count(b"[") + body.count(b"{")
 
 
 def _replay(body: bytes, receive: Receive) -> Receive:

@@ -13,15 +13,15 @@ from app.benchmarks import BenchService
 from app.compare import Trees
 from app.errors import RequestError
 from app.horizon import Horizon
-from app.hub import EventDict, EventHub
+from app.hub import EventHub
 from app.manager import RunManager
+from app.reads import ReadGate
 from app.settings import Settings
 from app.training import TrainingService
 from app.viewing import Viewer, ViewerService
-from planner.events import event_to_dict
 from planner.planners import get_planner
 from planner.runs import RunConfig
-from planner.store import LIVE_STATUSES, RunRecord, RunStore
+from planner.store import RunRecord, RunStore
 
 if TYPE_CHECKING:
     from app.viewgate import ViewerGate
@@ -43,6 +43,7 @@ class Dashboard:
         if settled:
             log.warning("%d run(s) whose process had stopped are now finished", settled)
         self.hub = EventHub(client_limit=settings.ws_queue_events)
+        self.reads = ReadGate()  # every read of events the server serves takes its turn here
         self.domains = catalog.Domains(settings.extra_domains)
         self.models = catalog.Models(settings.model_dir, self.domains)
         self.manager = RunManager(
@@ -150,19 +151,7 @@ class Dashboard:
         return self.store.get_run(run_id)
 
     def query_counts(self, run_id: str) -> dict[str, dict[str, int]]:
-        counts: dict[str, dict[str, int]] = {}
-        for q in self.store.stream_queries(run_ids=[run_id]):
-            entry = counts.setdefault(q.stream, {"ok": 0, "failed": 0})
-            entry["ok" if q.success else "failed"] += 1
-        return counts
-
-    def events(self, run_id: str, after: int, limit: int) -> tuple[list[EventDict], bool]:
-        """Stored events with ``seq > after`` (only stored ones are ever served) and whether
-        the run is over with nothing after them."""
-        record = self.store.get_run(run_id)  # KeyError for an unknown run
-        events = [event_to_dict(e) for e in self.store.events(run_id, after=after, limit=limit)]
-        done = record.status not in LIVE_STATUSES and len(events) < limit
-        return events, done
+        return self.store.query_counts(run_id)
 
     def reports(self) -> list[dict[str, Any]]:
         if not self.reports_dir.is_dir():

@@ -24,6 +24,9 @@ view for this domain":
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import io
 import itertools
 import logging
 import math
@@ -40,6 +43,7 @@ import trimesh
 import viser
 
 from app.viewer_search import Ghost, SearchFold, tree_layout
+from planner import figures
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.pddl.structs import Problem
 from planner.plans import PlanFileError, parse_plan
@@ -47,6 +51,7 @@ from planner.scene import SceneError
 from planner.sim.transforms import Pose, multiply, to_wxyz
 from planner.view import (
     IDENTITY,
+    ActionSteps,
     Body,
     BodyState,
     Box,
@@ -82,6 +87,12 @@ PANEL_MIN_WIDTH = 2.4  # its least width, metres
 MAX_LEVEL_STEP = 0.3  # the most height between tree levels, metres
 SLIDER_STEP = 0.1  # seconds
 NO_VIEW = "There is no 3D view for this domain"
+SPEEDS = ("0.5x", "1x", "2x", "5x", "10x", "20x")  # the plan's playback speeds
+DEFAULT_SPEED = "1x"
+# Layers a user can hide besides the domain's ghost layers (each gets a checkbox when it
+# first has ghosts): the failed queries' diamonds and the tree's panel.
+FIXED_LAYERS = (("failed", "failed queries (red diamonds)"), ("tree", "the search tree panel"))
+FRAME_MARGIN = 1.15  # "Frame the scene" leaves this much room around what it frames
 
 
 @dataclass(frozen=True)
@@ -97,11 +108,13 @@ class _Panel:
 
 @dataclass(frozen=True)
 class Picked:
-    """The ghost last clicked in the 3D view: its node, and how many clicks there were."""
+    """The ghost last clicked in the 3D view: its node, the run it was clicked in, and how many
+    clicks there were."""
 
     node_id: int
     label: str
     count: int
+    run_id: str | None = None
 
 
 class _BodyView:
@@ -231,16 +244,33 @@ class RunViewer:
     def __init__(self, host: str = "127.0.0.1", port: int = 8080) -> None:
         self._host = host
         self._lock = threading.RLock()
-        self._server = viser.ViserServer(host=host, port=port, verbose=False)
+        # viser prints a banner naming its own port, which only the gate (app/viewgate.py)
+        # reaches: `tamp serve` names the one address a user opens.
+        banner = io.StringIO()
+        with contextlib.redirect_stdout(banner):
+            self._server = viser.ViserServer(host=host, port=port, verbose=False)
+        log.debug("viser: %s", banner.getvalue().strip())
         self._server.scene.set_up_direction("+z")
         gui = self._server.gui
+        # A narrow panel: the view stands beside the page's tree. No share button: a run's
+        # scene is not for a public tunnel.
+        gui.configure_theme(control_width="small", show_share_button=False)
         self._status = gui.add_markdown("No run shown yet.")
+        with gui.add_folder("Camera"):
+            self._frame_button = gui.add_button("Frame the scene", icon=viser.Icon.FOCUS_2)
+            self._reset_button = gui.add_button("Reset the camera", icon=viser.Icon.HOME)
         with gui.add_folder("Plan"):
             self._play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY, disabled=True)
             self._time = gui.add_slider(
                 "Time (s)", min=0.0, max=1.0, step=SLIDER_STEP, initial_value=0.0, disabled=True
             )
+            self._speed = gui.add_dropdown("Speed", SPEEDS, initial_value=DEFAULT_SPEED)
             self._plan_note = gui.add_markdown("No plan yet.")
+        with gui.add_folder("Layers") as self._layers_folder:
+            self._legend = gui.add_markdown(_legend_text(None))
+        self._toggles: dict[str, viser.GuiCheckboxHandle] = {}
+        for layer, label in FIXED_LAYERS:
+            self._toggle(layer, label)
         with gui.add_folder("Selected node"):
             self._selection = gui.add_markdown(
                 "Select a node in the page's tree, or click a ghost."
@@ -248,8 +278,13 @@ class RunViewer:
             self._look = gui.add_checkbox("Look at the selected node", initial_value=False)
         self._play.on_click(self._on_play)
         self._time.on_update(self._on_seek)
+        self._speed.on_update(lambda _: self._on_speed())
         self._look.on_update(lambda _: self._look_at_focus())
+        self._frame_button.on_click(lambda _: self.frame())
+        self._reset_button.on_click(lambda _: self.reset_camera())
         self._key: tuple[str, int, str | None] | None = None  # (scene, seed, domain) built
+        self._run: str | None = None  # the run shown: its own picks, selection and camera
+        self._home: tuple[Vec3, Vec3] | None = None  # the scene's camera (position, look at)
         self._scene = ""
         self._note = ""  # why there is no 3D view of the scene shown, if there is none
         self._steps = 0  # events shown of a scene without a 3D view
@@ -350,19 +385,28 @@ class RunViewer:
         *,
         domain: str | None = None,
         focus: int | None = None,
+        run_id: str | None = None,
     ) -> None:
         """Reset the view to this run: build the scene (if it changed) and draw the state after
         exactly ``events`` (the page's current step). ``plan`` is the run's bound plan file dict
         when solved (else None); ``domain`` the run's domain reference (its folder, or None);
-        ``focus`` the search node the page selected (None: none)."""
+        ``focus`` the search node the page selected (None: none); ``run_id`` the run (another
+        run than the one shown forgets the ghost clicked, puts the plan back at its start and
+        every camera where the scene starts)."""
         with self._lock:
             if self._closed:
                 return
             try:
-                if (scene, seed, domain) != self._key:
+                other_run = run_id != self._run or (scene, seed, domain) != self._key
+                self._run = run_id
+                if other_run:
                     self._picked = None
+                    self._t = 0.0
+                    self._playing = False
                 self._focus = focus
                 self._show(scene, seed, events, plan, domain)
+                if other_run:
+                    self.reset_camera()
             except Exception:
                 log.exception("viewer: could not show scene %r (seed %r)", scene, seed)
                 self._set_status(f"The 3D view could not show **{scene}**; see the server log.")
@@ -393,7 +437,8 @@ class RunViewer:
             self._playing = False
         self._stop.set()
         self._thread.join(timeout=5.0)
-        self._server.stop()
+        with contextlib.redirect_stdout(io.StringIO()):  # viser says it stopped, on stdout
+            self._server.stop()
         log.info("3D viewer stopped")
 
     # --- showing a run -------------------------------------------------------------------------
@@ -421,10 +466,12 @@ class RunViewer:
 
     def _load(self, scene: str, seed: int, domain: str | None) -> None:
         """Forget what was built and build the scene (or note why there is none)."""
+        for name in list(self._layers):  # the selection's labels too: not under a group
+            self._drop(name)
         for group in self._groups.values():
             group.remove()
         self._groups.clear()
-        self._layers.clear()
+        self._home = None
         self._bodies.clear()
         self._shown = _nothing_shown()
         self._loaded = self._problem = self._view = None
@@ -487,10 +534,13 @@ class RunViewer:
         self._panel = _Panel(hi[0] + PANEL_GAP, cy + width / 2, width, top, PANEL_HEIGHT)
         camera = self._server.initial_camera
         if view.camera is not None:
-            camera.position, camera.look_at = view.camera
+            self._home = view.camera
         else:
-            camera.position = (lo[0] - 1.9, cy - 1.5, max(2.4, hi[2] + 1.5))
-            camera.look_at = (cx + 0.5, cy, (lo[2] + hi[2]) / 2)
+            self._home = (
+                (lo[0] - 1.9, cy - 1.5, max(2.4, hi[2] + 1.5)),
+                (cx + 0.5, cy, (lo[2] + hi[2]) / 2),
+            )
+        camera.position, camera.look_at = self._home
 
     def _note_text(self) -> str:
         return f"**{self._scene}** · {self._steps} events\n\n{self._note}"
@@ -551,9 +601,7 @@ class RunViewer:
         steps = max(math.ceil(anim.duration / SLIDER_STEP), 1)
         self._time.max = round(steps * SLIDER_STEP, 6)  # 28.4, not 28.400000000000002
         _set_slider(self._time, min(self._t, anim.duration))
-        _set_markdown(
-            self._plan_note, f"Plan: {anim.duration:.1f} s of motion, played in real time."
-        )
+        _set_markdown(self._plan_note, self._plan_text())
 
     def _on_play(self, _: viser.GuiEvent[viser.GuiButtonHandle]) -> None:
         with self._lock:
@@ -564,6 +612,19 @@ class RunViewer:
             self._playing = not self._playing
             self._update_plan_gui()
 
+    def _on_speed(self) -> None:
+        with self._lock:
+            if not self._closed:
+                _set_markdown(self._plan_note, self._plan_text())
+
+    def set_speed(self, speed: str) -> None:
+        """Play the plan at ``speed`` (one of SPEEDS), as the GUI's dropdown does."""
+        if speed not in SPEEDS:
+            raise ValueError(f"unknown speed {speed!r} (known: {', '.join(SPEEDS)})")
+        with self._lock:
+            self._speed.value = speed  # type: ignore[misc]  # hidden from mypy
+            _set_markdown(self._plan_note, self._plan_text())
+
     def _on_seek(self, event: viser.GuiEvent[viser.GuiSliderHandle[float]]) -> None:
         if event.client is None:  # our own update of the slider
             return
@@ -572,18 +633,48 @@ class RunViewer:
                 return
             self._t = min(max(0.0, float(self._time.value)), self._anim.duration)
             self._pose_bodies()
+            _set_markdown(self._plan_note, self._plan_text())
+
+    def _plan_text(self) -> str:
+        """The plan's length, the speed it plays at, and the action playing now."""
+        anim = self._anim
+        if anim is None:
+            return "No plan yet."
+        speed = self._speed.value
+        lines = [
+            f"Plan: {anim.duration:.1f} s of motion, played "
+            + ("in real time." if speed == "1x" else f"at {speed}.")
+        ]
+        now = self.action
+        if now is not None:
+            steps = getattr(anim, "steps", None)
+            total = len(steps.labels) if isinstance(steps, ActionSteps) else 0
+            lines.append(f"Now: action {now[0] + 1} of {total}, `{now[1]}`")
+        return "\n\n".join(lines)
+
+    @property
+    def action(self) -> tuple[int, str] | None:
+        """The action of the plan playing at the playhead (its index and text), if the
+        domain's timeline says."""
+        with self._lock:
+            steps = getattr(self._anim, "steps", None)
+            return steps.at(self._t) if isinstance(steps, ActionSteps) else None
+
+    def _speed_factor(self) -> float:
+        return float(str(self._speed.value).removesuffix("x"))
 
     def _advance(self, dt: float) -> None:
         anim = self._anim
         if anim is None:
             self._playing = False
             return
-        self._t = min(self._t + dt, anim.duration)
+        self._t = min(self._t + dt * self._speed_factor(), anim.duration)
         if self._t >= anim.duration:
             self._playing = False
             self._update_plan_gui()
         _set_slider(self._time, round(self._t, 3))
         self._pose_bodies()
+        _set_markdown(self._plan_note, self._plan_text())
 
     def _tick(self) -> None:
         last = time.perf_counter()
@@ -647,13 +738,18 @@ class RunViewer:
                 # A layer drawn before that this state has no ghosts in at all (the page
                 # stepped back to before its first) goes.
                 for name in [n for n in self._layers if n.startswith("/search/")]:
-                    if name.removeprefix("/search/") not in fold.ghosts:
+                    layer = _layer_of(name)
+                    if layer != "failed" and layer not in fold.ghosts:
                         self._drop(name)
-                        self._shown.pop(name.removeprefix("/search/"), None)
+                        self._shown.pop(layer, None)
                 self._shown["failed_marked"] = self._draw_failures(fold)
                 self._shown["tree_nodes"] = self._draw_tree(fold)
                 self._draw_focus(fold)
+                for layer in fold.ghosts:
+                    self._toggle(layer, f"{layer} ghosts")
+                self._apply_visibility()
             self._set_status(self._status_text(fold))
+            _set_markdown(self._legend, _legend_text(fold))
             if fold.solution is not None and self._anim is None:
                 self._update_plan_gui()
         # A big tree takes a while to draw: live redraws then come less often.
@@ -666,20 +762,104 @@ class RunViewer:
         return ghosts[-(MAX_PATHS if kind == "path" else MAX_GHOSTS) :]
 
     def _draw_layer(self, fold: SearchFold, layer: str, all_ghosts: list[Ghost]) -> int:
-        """Draw the latest ghosts of one layer as one batch, each clickable; returns how many."""
-        name = f"/search/{layer}"
-        kind = all_ghosts[0].marker.kind if all_ghosts else None
-        ghosts = [g for g in self._drawn(all_ghosts) if g.marker.kind == kind]
-        if not ghosts:
-            self._drop(name)
-            return 0
-        colors = fold.colors([g.node_id for g in ghosts])
-        markers = [g.marker for g in ghosts]
-        opacity = GHOST_OPACITY if markers[0].translucent else None
-        handle = self._draw_markers(name, markers, colors, opacity)
-        if isinstance(handle, viser.BatchedMeshHandle):  # viser picks meshes, not lines
-            handle.on_click(lambda event: self._on_pick(event, ghosts))
+        """Draw the latest ghosts of one layer, one batch per shape (a grasp's ghost is sized
+        to its block), each clickable; returns how many."""
+        ghosts = self._drawn(all_ghosts)
+        groups: dict[tuple[str, tuple[Any, ...]], list[Ghost]] = {}
+        for g in ghosts:
+            groups.setdefault((g.marker.kind, g.marker.parts), []).append(g)
+        names: list[str] = []
+        for i, group in enumerate(groups.values()):
+            name = f"/search/{layer}" if i == 0 else f"/search/{layer}~{i}"
+            names.append(name)
+            markers = [g.marker for g in group]
+            opacity = GHOST_OPACITY if markers[0].translucent else None
+            colors = fold.colors([g.node_id for g in group])
+            handle = self._draw_markers(name, markers, colors, opacity)
+            if isinstance(handle, viser.BatchedMeshHandle):  # viser picks meshes, not lines
+                handle.on_click(functools.partial(self._on_pick, ghosts=group))
+        for name in [n for n in self._layers if _layer_of(n) == layer and n.startswith("/search/")]:
+            if name not in names:
+                self._drop(name)
         return len(ghosts)
+
+    # --- layers, the legend, the camera --------------------------------------------------------
+
+    def _toggle(self, layer: str, label: str) -> None:
+        """The checkbox that shows or hides ``layer`` (made once, the first time it is asked)."""
+        if layer in self._toggles:
+            return
+        with self._layers_folder:
+            box = self._server.gui.add_checkbox(label, initial_value=True)
+        box.on_update(lambda _: self._on_toggle())
+        self._toggles[layer] = box
+
+    def _on_toggle(self) -> None:
+        with self._lock:
+            if not self._closed:
+                self._apply_visibility()
+
+    def _apply_visibility(self) -> None:
+        for name, handle in self._layers.items():
+            box = self._toggles.get(_layer_of(name))
+            if box is not None:
+                handle.visible = bool(box.value)
+
+    @property
+    def layers(self) -> dict[str, bool]:
+        """Each layer a user can hide, and whether it is shown."""
+        with self._lock:
+            return {layer: bool(box.value) for layer, box in self._toggles.items()}
+
+    def set_layer(self, layer: str, shown: bool) -> None:
+        """Show or hide a layer, as its checkbox does (KeyError for an unknown one)."""
+        with self._lock:
+            self._toggles[layer].value = shown  # type: ignore[misc]  # hidden from mypy
+            self._apply_visibility()
+
+    def cameras(self) -> list[tuple[Vec3, Vec3]]:
+        """Where each connected client's camera is and what it looks at."""
+        out = []
+        for client in self._server.get_clients().values():
+            p, a = client.camera.position, client.camera.look_at
+            out.append(
+                ((float(p[0]), float(p[1]), float(p[2])), (float(a[0]), float(a[1]), float(a[2])))
+            )
+        return out
+
+    def reset_camera(self) -> None:
+        """Every client's camera where the scene starts (its view hook's camera)."""
+        with self._lock:
+            if self._home is not None:
+                for client in self._server.get_clients().values():
+                    _aim(client.camera, *self._home)
+
+    def frame(self) -> None:
+        """Every client's camera, from where it looks, pulled back to see the whole scene: the
+        bodies, every ghost drawn and the tree's panel."""
+        with self._lock:
+            points = [c for b in self._bodies.values() for c in b.corners]
+            if self._fold is not None:
+                for ghosts in self._fold.ghosts.values():
+                    points += [g.marker.position for g in self._drawn(ghosts)]
+            panel = self._panel
+            if panel is not None:
+                points += [
+                    (panel.x, panel.y_left, panel.top),
+                    (panel.x, panel.y_left - panel.width, panel.top - panel.height),
+                ]
+            if not points:
+                return
+            lo, hi = np.min(points, axis=0), np.max(points, axis=0)
+            centre = (lo + hi) / 2
+            radius = max(float(np.linalg.norm(hi - lo)) / 2, 0.25)
+            for client in self._server.get_clients().values():
+                camera = client.camera
+                direction = np.asarray(camera.position) - np.asarray(camera.look_at)
+                norm = float(np.linalg.norm(direction)) or 1.0
+                distance = FRAME_MARGIN * radius / math.sin(max(camera.fov, 0.1) / 2)
+                eye = centre + direction / norm * distance
+                _aim(camera, _vec(eye), _vec(centre))
 
     def _draw_markers(
         self,
@@ -805,10 +985,9 @@ class RunViewer:
                 norm = float(np.linalg.norm(direction)) or 1.0
                 target = np.asarray(where, dtype=np.float64)
                 eye = target + direction / norm * LOOK_DISTANCE
-                camera.look_at = (float(target[0]), float(target[1]), float(target[2]))
-                camera.position = (float(eye[0]), float(eye[1]), float(eye[2]))
+                _aim(camera, _vec(eye), _vec(target))
 
-    def _on_pick(self, event: Any, ghosts: Sequence[Ghost]) -> None:
+    def _on_pick(self, event: Any, *, ghosts: Sequence[Ghost]) -> None:
         """A click on a ghost of a layer: name its node (``event.instance_index``, else the
         ghost nearest the click's ray)."""
         with self._lock:
@@ -822,7 +1001,7 @@ class RunViewer:
                 )
             node = ghosts[index].node_id
             count = 1 if self._picked is None else self._picked.count + 1
-            self._picked = Picked(node, fold.labels.get(node, ""), count)
+            self._picked = Picked(node, fold.labels.get(node, ""), count, self._run)
             log.info("viewer: ghost of node %d clicked", node)
             _set_markdown(self._selection, self._selection_text(fold))
 
@@ -987,6 +1166,53 @@ def _bounds(bodies: Sequence[Body], built: Mapping[str, _BodyView]) -> tuple[Vec
         return (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)
     xs, ys, zs = zip(*points, strict=True)
     return (min(xs), min(ys), min(zs)), (max(xs), max(ys), max(zs))
+
+
+def _layer_of(name: str) -> str:
+    """The layer a scene node's name belongs to: ``/search/grasps~1`` -> ``grasps``,
+    ``/tree/edges`` -> ``tree``; ``""`` for others (the selection's highlights)."""
+    if name.startswith("/tree/"):
+        return "tree"
+    if name.startswith("/search/"):
+        return name.removeprefix("/search/").split("~")[0]
+    return ""
+
+
+def _vec(v: Any) -> Vec3:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _aim(camera: viser.CameraHandle, position: Vec3, look_at: Vec3) -> None:
+    """Put a camera at ``position`` looking at ``look_at`` (viser moves ``look_at`` with the
+    position: the position first)."""
+    camera.position = position
+    camera.look_at = look_at
+
+
+def _legend_text(fold: SearchFold | None) -> str:
+    """What the colours of the scene mean (planner/figures.py's scale of Q)."""
+    q = None if fold is None else fold.q_range()
+    lo, hi = (f"{q[0]:.1f} s", f"{q[1]:.1f} s") if q is not None else ("low", "high")
+    swatch = " → ".join(
+        f"<span style='color:{_css(figures.q_rgb_at(f))}'>■</span>" for f in (0.0, 0.5, 1.0)
+    )
+    return "\n\n".join(
+        [
+            f"**Ghost colour**: predicted cost Q, {lo} {swatch} {hi} (green low, red high; "
+            f"between percentiles {figures.Q_PERCENTILES[0]:g} and {figures.Q_PERCENTILES[1]:g} "
+            "of the Q predicted); a node without a prediction of its own takes its nearest "
+            "predicted ancestor's",
+            f"<span style='color:{_css(figures.NO_PREDICTION_RGB)}'>■</span> grey: no "
+            f"prediction · <span style='color:{_css(FAILED_RGB)}'>◆</span> failed query · "
+            f"<span style='color:{_css(SOLUTION_RGB)}'>■</span> solution branch · "
+            f"<span style='color:{_css(FOCUS_RGB)}'>■</span> selected node · "
+            f"<span style='color:{_css(BRANCH_RGB)}'>■</span> its branch",
+        ]
+    )
+
+
+def _css(rgb: Sequence[int]) -> str:
+    return f"rgb({rgb[0]},{rgb[1]},{rgb[2]})"
 
 
 def _nothing_shown() -> dict[str, int]:

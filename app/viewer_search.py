@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from planner import figures
 from planner.domains import LoadedDomain
 from planner.pddl.structs import Problem
 from planner.values import ValueDecodeError
@@ -28,10 +29,7 @@ log = logging.getLogger(__name__)
 
 WARN_SKIPPED = 5  # malformed events logged as warnings per fold; the rest at debug level
 
-Q_LOW = np.array([46, 160, 67], dtype=np.float64)  # green: the lowest predicted cost seen
-Q_MID = np.array([235, 190, 30], dtype=np.float64)  # yellow: half way
-Q_HIGH = np.array([215, 45, 40], dtype=np.float64)  # red: the highest predicted cost seen
-NO_PREDICTION = (120, 120, 125)  # grey: no model prediction for the node (baseline planner)
+NO_PREDICTION = figures.NO_PREDICTION_RGB  # grey: no model prediction (the baseline planner)
 
 
 @dataclass(frozen=True)
@@ -81,6 +79,8 @@ class SearchFold:
         self.labels: dict[int, str] = {}  # each node's label (its event's)
         self._pending: dict[int, Mapping[str, Any]] = {}  # stream_queried by the node it made
         self._effective: dict[int, float | None] | None = None  # _effective_q until next fold
+        self._scale: tuple[float, float] | None = None  # q_range, kept until the next fold
+        self._scale_stale = True
 
     # --- folding -------------------------------------------------------------------------------
 
@@ -88,6 +88,7 @@ class SearchFold:
         """Take one more event; a malformed one is logged and skipped."""
         self.events += 1
         self._effective = None
+        self._scale_stale = True
         try:
             kind = event.get("type")
             if kind == "node_added":
@@ -176,52 +177,38 @@ class SearchFold:
         return len(self.failures)
 
     def colors(self, node_ids: Sequence[int]) -> npt.NDArray[np.uint8]:
-        """One RGB row per node: its predicted Q on a green-yellow-red scale spread over every
-        Q seen so far; a node without a prediction of its own (one made in a simulation) takes
-        its nearest predicted ancestor's; grey when there is none."""
+        """One RGB row per node, on the page's scale (planner/figures.py): its predicted Q
+        between the percentiles of every Q predicted so far, green low to red high; a node
+        without a prediction of its own (one made in a simulation) takes its nearest predicted
+        ancestor's; grey when there is none."""
         out = np.empty((len(node_ids), 3), dtype=np.uint8)
         out[:] = NO_PREDICTION
-        if not self.q or not node_ids:
+        scale = self.q_range()
+        if scale is None or not node_ids:
             return out
-        lo, hi = min(self.q.values()), max(self.q.values())
+        lo, hi = scale
         effective = self._effective_q()
-        q = np.array([effective.get(n) for n in node_ids], dtype=np.float64)  # None -> nan
-        known = ~np.isnan(q)
-        t = np.clip((q[known] - lo) / (hi - lo), 0.0, 1.0) if hi > lo else np.zeros(known.sum())
-        low = t[:, None] < 0.5
-        first = Q_LOW + (Q_MID - Q_LOW) * (t[:, None] / 0.5)
-        second = Q_MID + (Q_HIGH - Q_MID) * ((t[:, None] - 0.5) / 0.5)
-        out[known] = np.where(low, first, second).astype(np.uint8)
+        for i, n in enumerate(node_ids):
+            q = effective.get(n)
+            if q is not None:
+                out[i] = figures.q_rgb_at(figures.q_fraction(q, lo, hi))
         return out
 
     def _effective_q(self) -> dict[int, float | None]:
-        """Each node's Q, or its nearest predicted ancestor's (None: no prediction above it)."""
-        if self._effective is not None:
-            return self._effective
-        effective: dict[int, float | None] = {}
-        self._effective = effective
-        for start in self.nodes:
-            chain: list[int] = []
-            current: int | None = start
-            value: float | None = None
-            while current is not None:
-                if current in effective:
-                    value = effective[current]
-                    break
-                if current in self.q:
-                    value = effective[current] = self.q[current]
-                    break
-                chain.append(current)
-                node = self.nodes.get(current)
-                current = None if node is None else node.parent_id
-            for node_id in chain:
-                effective[node_id] = value
-        return effective
+        """Each node's Q for colouring (:func:`planner.figures.effective_q`), kept until the
+        next fold."""
+        if self._effective is None:
+            parents = {n: node.parent_id for n, node in self.nodes.items()}
+            self._effective = figures.effective_q(parents, self.q)
+        return self._effective
 
     def q_range(self) -> tuple[float, float] | None:
-        if not self.q:
-            return None
-        return (min(self.q.values()), max(self.q.values()))
+        """The colour scale: :func:`planner.figures.q_scale` of every Q predicted so far
+        (kept until the next fold)."""
+        if self._scale_stale:
+            self._scale = figures.q_scale(self.q.values())
+            self._scale_stale = False
+        return self._scale
 
     def branch(self, node_id: int) -> list[int]:
         """Node ids from the root down to ``node_id`` (empty for a node not in the tree)."""

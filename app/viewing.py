@@ -32,6 +32,7 @@ class Viewer(Protocol):
         *,
         domain: str | None = None,
         focus: int | None = None,
+        run_id: str | None = None,
     ) -> None: ...
 
     def extend(self, events: Any) -> None: ...
@@ -77,7 +78,9 @@ class ViewerService:
             self._last_seq = events[-1]["seq"] if events else -1
             ref = record.config.get("domain")
             domain = ref if isinstance(ref, str) else None
-            self.viewer.show(record.scene, record.seed, events, plan, domain=domain, focus=node)
+            self.viewer.show(
+                record.scene, record.seed, events, plan, domain=domain, focus=node, run_id=run_id
+            )
 
         self._jobs.put(job)
 

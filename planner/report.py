@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from planner import figures
 from planner.store import BenchTrialRecord, QueryOutcome, RunStore
 
 BOOTSTRAP = 5000  # resamples for the intervals
@@ -45,13 +46,15 @@ def paired_improvement(
     reference: Sequence[float],
     rng: np.random.Generator,
     resamples: npt.NDArray[np.intp] | None = None,
-) -> dict[str, float | int | None]:
+) -> dict[str, float | int | str | None]:
     """``1 - mean(ours) / mean(reference)`` over paired seeds, with a bootstrap 95% interval.
     ``resamples`` (:data:`BOOTSTRAP` rows of seed indices) lets measures of the same seeds share
-    one draw; without, ``rng`` draws them."""
+    one draw; without, ``rng`` draws them. ``note`` says when there are too few seeds for the
+    interval to mean much (:func:`planner.figures.interval_note`), else None."""
     n = len(ours)
+    note = figures.interval_note(n)  # under 10 seeds, the interval says it is rough
     if n == 0 or sum(reference) <= 0:
-        return {"n": n, "mean": None, "low": None, "high": None}
+        return {"n": n, "mean": None, "low": None, "high": None, "note": note}
     a, b = np.asarray(ours), np.asarray(reference)
     point = 1.0 - a.mean() / b.mean()
     idx = rng.integers(0, n, size=(BOOTSTRAP, n)) if resamples is None else resamples
@@ -59,7 +62,7 @@ def paired_improvement(
         raise ValueError(f"resamples of shape {idx.shape} for {n} seeds")
     samples = 1.0 - a[idx].mean(axis=1) / np.maximum(b[idx].mean(axis=1), 1e-12)
     low, high = np.percentile(samples, [2.5, 97.5])
-    return {"n": n, "mean": float(point), "low": float(low), "high": float(high)}
+    return {"n": n, "mean": float(point), "low": float(low), "high": float(high), "note": note}
 
 
 def failure_kind(q: QueryOutcome) -> str:
@@ -363,7 +366,7 @@ def table_markdown(summary: dict[str, Any]) -> str:
             f"{_fmt(c['mean'], True)}, 95% CI {_fmt(c['low'], True)} to {_fmt(c['high'], True)}) "
             f"over {c['n']} paired seeds, unsolved trials counted at the budget; improvement "
             f"{_fmt(b['mean'], True)} ({_fmt(b['low'], True)} to {_fmt(b['high'], True)}) over "
-            f"the {b['n']} seeds both solved."
+            f"the {b['n']} seeds both solved." + (f" Note: {c['note']}." if c.get("note") else "")
         )
     for ref, entries in summary.get("paired_against", {}).items():
         lines += ["", *_ablation_markdown(summary, ref, entries)]
@@ -660,7 +663,9 @@ def _html_table(summary: dict[str, Any]) -> str:
                 f"<li>{m}: {_change(c['mean'])} (improvement {_fmt(c['mean'], True)}, 95% CI "
                 f"{_fmt(c['low'], True)} to {_fmt(c['high'], True)}), {c['n']} {where}; "
                 f"{_change(e[f'{m}_both_solved']['mean'])} over the "
-                f"{e[f'{m}_both_solved']['n']} seeds both solved</li>"
+                f"{e[f'{m}_both_solved']['n']} seeds both solved"
+                + (f" <b>({html.escape(c['note'])})</b>" if c.get("note") else "")
+                + "</li>"
             )
         rows.append(
             f"<h3>{html.escape(p)} vs {html.escape(summary['reference'])} (paired mean "

@@ -194,7 +194,9 @@ class BodyState:
 
 
 class Timeline(Protocol):
-    """A bound plan in time: the state of every body that moves, at any second."""
+    """A bound plan in time: the state of every body that moves, at any second. A timeline
+    may also carry ``steps`` (:class:`ActionSteps`): when each action starts, so the view can
+    say which one plays."""
 
     @property
     def duration(self) -> float: ...
@@ -206,6 +208,32 @@ class Timeline(Protocol):
 
 
 @dataclass(frozen=True)
+class ActionSteps:
+    """When each action of a plan starts (seconds into it) and its text, ``(move q0 q1 t1)``;
+    an action that takes no time starts where the next one does."""
+
+    starts: tuple[float, ...]
+    labels: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        if len(self.starts) != len(self.labels):
+            raise ValueError("action steps need as many labels as starts")
+        if any(b < a for a, b in zip(self.starts, self.starts[1:], strict=False)):
+            raise ValueError("action start times must not decrease")
+
+    def at(self, t: float) -> tuple[int, str] | None:
+        """``(index, text)`` of the action playing ``t`` seconds into the plan (the last one
+        started by then: of several starting at once, the one that takes time), None before
+        the first."""
+        import bisect
+
+        i = bisect.bisect_right(self.starts, t) - 1
+        if i < 0:
+            return None if not self.starts else (0, self.labels[0])
+        return i, self.labels[i]
+
+
+@dataclass(frozen=True)
 class Keyframes:
     """A :class:`Timeline` from keyframes: each body moves in a straight line (and turns by
     the shortest rotation) between its states at consecutive keyframe times; joints are
@@ -213,6 +241,7 @@ class Keyframes:
 
     times: tuple[float, ...]
     states: tuple[Mapping[str, BodyState], ...]
+    steps: ActionSteps | None = None  # which action plays when
 
     def __post_init__(self) -> None:
         if len(self.times) != len(self.states) or not self.times:

@@ -31,7 +31,8 @@ export function improvement(p) {
   if (!p || p.mean === null || p.mean === undefined) return `<span class="muted">– (${p?.n ?? 0} seeds)</span>`;
   const words = `${(100 * Math.abs(p.mean)).toFixed(1)}% ${p.mean >= 0 ? "less" : "more"}`;
   const cls = p.low > 0 ? "better" : p.high < 0 ? "worse" : "";
-  return `<span class="${cls}"><b>${words}</b></span> <span class="muted">(95%: ${pct(p.low)} to ${pct(p.high)}, ${p.n} seeds)</span>`;
+  const note = p.note ? ` <span class="interval-note" data-testid="interval-note" title="${escapeHtml(p.note)}">rough: only ${p.n} seed${p.n === 1 ? "" : "s"}</span>` : "";
+  return `<span class="${cls}"><b>${words}</b></span> <span class="muted">(95%: ${pct(p.low)} to ${pct(p.high)}, ${p.n} seeds)</span>${note}`;
 }
 
 export class BenchPage {

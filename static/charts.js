@@ -1,8 +1,9 @@
 // Plotly charts of the selected run at the current step. Plotly is a classic script served by
-// the app at /vendor/plotly.min.js (window.Plotly); without it the charts say so.
+// the app at /vendor/plotly.min.js (window.Plotly), loaded by app.js once a run is drawn; until
+// then the charts say they are loading, and without it that they are unavailable.
 
-const OK = "#16a34a";
-const FAILED = "#dc2626";
+import { QUERY_KIND_RGB, QUERY_KIND_TEXT, QUERY_KINDS } from "/generated/definitions.js";
+
 const CONFIG = { displayModeBar: false, responsive: true };
 const EMPTY = {
   showarrow: false,
@@ -20,28 +21,36 @@ function ready(el) {
     return true;
   }
   el.dataset.state = "unavailable";
-  el.textContent = "Charts unavailable: /vendor/plotly.min.js did not load.";
+  el.textContent = window.plotlyFailed
+    ? "Charts unavailable: /vendor/plotly.min.js did not load."
+    : "Loading the charts…";
   return false;
 }
 
 /**
- * Stacked bars of the queries per stream. ``counts`` is {stream: {ok, failed}}; ``note`` is a
- * short text under the title (where the counts come from).
+ * Stacked bars of the queries per stream. ``counts`` is {stream: {ok, failed, reused}} (the
+ * kinds of planner/figures.py: reused answers ran no sampler, and are not counted as queries);
+ * ``note`` is a short text under the title (where the counts come from).
  */
 export function drawQueries(el, counts, note = "", empty = "no stream queries yet") {
   if (!ready(el)) return;
   const streams = Object.keys(counts).sort();
-  const ok = streams.map((s) => counts[s].ok);
-  const failed = streams.map((s) => counts[s].failed);
-  const total = ok.reduce((a, b) => a + b, 0) + failed.reduce((a, b) => a + b, 0);
-  const data = [
-    { type: "bar", name: "ok", x: streams, y: ok, marker: { color: OK } },
-    { type: "bar", name: "failed", x: streams, y: failed, marker: { color: FAILED } },
-  ];
+  const kinds = QUERY_KINDS.filter((k) => k !== "reused" || streams.some((s) => counts[s].reused));
+  const total = streams.reduce((a, s) => a + counts[s].ok + counts[s].failed, 0);
+  const reused = streams.reduce((a, s) => a + (counts[s].reused ?? 0), 0);
+  const data = kinds.map((kind) => ({
+    type: "bar",
+    name: kind === "reused" ? "reused (no sampler)" : kind,
+    x: streams,
+    y: streams.map((s) => counts[s][kind] ?? 0),
+    marker: { color: `rgb(${QUERY_KIND_RGB[kind].join(",")})` },
+    hovertemplate: `%{x}: %{y} ${kind}<extra>${QUERY_KIND_TEXT[kind]}</extra>`,
+  }));
+  const apart = reused ? `; ${reused} reused answers apart` : "";
   const small = note ? ` <span style="font-size:11px;color:#6b7280">${note}</span>` : "";
   const layout = {
     barmode: "stack",
-    title: { text: `Queries per stream (${total})${small}`, x: 0.02, font: { size: 13 } },
+    title: { text: `Queries per stream (${total}${apart})${small}`, x: 0.02, font: { size: 13 } },
     font: FONT,
     margin: { l: 44, r: 12, t: 36, b: 70 },
     legend: { orientation: "h", x: 1, xanchor: "right", y: 1.14 },
@@ -54,17 +63,20 @@ export function drawQueries(el, counts, note = "", empty = "no stream queries ye
   window.Plotly.react(el, data, layout, CONFIG);
   el.dataset.state = "drawn";
   el.dataset.bars = String(streams.length);
+  el.dataset.queries = String(total);
+  el.dataset.reused = String(reused);
 }
 
 /**
- * One horizontal stacked bar of where the run's seconds went: abstract (top-k) planning, stream
- * queries, the rest of the search, then executing the plan's trajectories.
+ * One horizontal stacked bar of where the run's seconds went: the skeleton source's (top-k
+ * planning, every batch), stream queries, the rest of the search, then executing the plan's
+ * trajectories.
  */
 export function drawTime(el, { topk, queries, planning, execution, live }) {
   if (!ready(el)) return;
   const search = Math.max(planning - topk - queries, 0);
   const parts = [
-    ["top-k planning", topk, "#6366f1"],
+    ["skeletons (top-k)", topk, "#6366f1"],
     ["stream queries", queries, "#f59e0b"],
     ["search overhead", search, "#94a3b8"],
     ["execution", execution ?? 0, "#0ea5e9"],

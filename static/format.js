@@ -59,3 +59,11 @@ export function escapeHtml(s) {
     (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c],
   );
 }
+
+const NUMBER = new Intl.NumberFormat("en-US");
+
+/** A count with thousands separators ("12,345"); one formatter for all (toLocaleString made a
+ * new one on every call, on every step of the replay). */
+export function count(n) {
+  return NUMBER.format(n);
+}

@@ -4,6 +4,7 @@
 // and total seconds against the objects in the goal), one line per planner with its 95%
 // interval as error bars; a click on a point opens its benchmark.
 
+import { MIN_INTERVAL_SEEDS } from "/generated/definitions.js";
 import { api } from "./api.js";
 import { escapeHtml } from "./format.js";
 
@@ -121,7 +122,10 @@ export class HorizonPanel {
       .map((b) => `${escapeHtml(b.scene)} (${b.objects})${b.status === "done" ? "" : ` ${escapeHtml(b.status)}: ${b.done}/${b.total} trials`}`)
       .join(" · ");
     this.body.querySelector("[data-testid=horizon-scenes]").innerHTML =
-      `${scenes}. Means over the seeds every planner finished (unsolved at the budget), 95% intervals; a click opens the benchmark.`;
+      `${scenes}. Means over the seeds every planner finished (unsolved at the budget), 95% intervals; a click opens the benchmark.` +
+      (series.trials < MIN_INTERVAL_SEEDS
+        ? ` <b data-testid="horizon-few-seeds">Only ${series.trials} seed${series.trials === 1 ? "" : "s"} a scene: intervals over fewer than ${MIN_INTERVAL_SEEDS} are rough.</b>`
+        : "");
     const xs = [...new Set(series.points.map((p) => p.objects))].sort((a, b) => a - b);
     const span = xs.length > 1 ? xs[xs.length - 1] - xs[0] : 1;
     const n = series.planners.length;

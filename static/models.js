@@ -4,13 +4,14 @@
 // from stored runs (a background job: POST /api/training, the code of `tamp train`), and a
 // button that launches a learned run with a model.
 
+import { LIVE_STATUSES, RUN_STATUSES } from "/generated/definitions.js";
 import { ApiError, api } from "./api.js";
 import { escapeHtml, num, seconds, when } from "./format.js";
 
 const POLL_JOB_MS = 700;
 const CONFIG = { displayModeBar: false, responsive: true };
 const FONT = { family: "system-ui, -apple-system, Segoe UI, sans-serif", size: 12, color: "#1f2937" };
-const FINISHED = new Set(["solved", "timeout", "failed", "cancelled", "interrupted"]);
+const FINISHED = new Set(RUN_STATUSES.filter((s) => !LIVE_STATUSES.includes(s)));
 
 const $ = (id) => document.getElementById(id);
 

@@ -155,7 +155,11 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
     assert summary["planners"]["baseline"]["solved"] == 2
     paired = summary["paired"]["sequential"]["total_censored"]
     assert paired["n"] == 2 and paired["low"] <= paired["mean"] <= paired["high"]
+    # Two seeds: every view of the interval says it is rough (planner/figures.py).
+    assert paired["note"] is not None and "only 2 seeds" in paired["note"]
+    assert f"Note: {paired['note']}." in table_markdown(summary)
     page = render_html(summary)
+    assert "only 2 seeds" in page
     assert "Plotly" in page and "sequential vs baseline" in page  # figures and the paired table
     assert "baseline (x)" in page
     assert page.count("href='/#run=") == 4  # every trial links to its run on the dashboard

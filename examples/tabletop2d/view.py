@@ -11,6 +11,7 @@ from typing import Any
 from planner.abstract import GroundAction
 from planner.pddl import Problem
 from planner.view import (
+    ActionSteps,
     Body,
     BodyState,
     Box,
@@ -143,8 +144,10 @@ class TabletopView:
             return {GRIPPER: BodyState((gripper.x, gripper.y, GRIPPER_Z)), **blocks}
 
         times, states = [0.0], [frame()]
+        starts: list[float] = []
         t = 0.0
         for act in actions:
+            starts.append(t)
             if act.name == "move":
                 path = values.get(act.args[2])
                 if not isinstance(path, Path2D):
@@ -165,7 +168,8 @@ class TabletopView:
                 raise ValueError(f"unknown action {act.name!r}")
             times.append(t)
             states.append(frame())
-        return Keyframes(tuple(times), tuple(states))
+        steps = ActionSteps(tuple(starts), tuple(str(a) for a in actions))
+        return Keyframes(tuple(times), tuple(states), steps)
 
 
 def _names(top: Tabletop) -> set[str]:

@@ -206,3 +206,19 @@ def test_unknown_benchmarks_are_404(client: TestClient) -> None:
     assert client.get("/api/benchmarks/nope").status_code == 404
     assert client.delete("/api/benchmarks/nope").status_code == 404
     assert client.post("/api/benchmarks/nope/resume", json={}).status_code == 404
+
+
+def test_a_benchmark_names_its_model_as_the_models_page_does(
+    client: TestClient, tmp_path: Path
+) -> None:
+    """Every domain ships its model as model.pt: the benchmark's header said "model model";
+    it is the name the models page offers the file by (a shipped one's: its domain's)."""
+    from planner.bench import create_bench
+
+    config = make_config("kitchen-1", ["baseline", "learned"], trials=1, seed_start=0, budget_s=5)
+    assert config.model is not None and Path(config.model).name == "model.pt"
+    with RunStore(tmp_path / "runs.db") as store:
+        bench_id = create_bench(store, config)
+    [listed] = [b for b in client.get("/api/benchmarks").json() if b["id"] == bench_id]
+    assert listed["model"] == "kitchen"
+    assert "kitchen" in {m["name"] for m in client.get("/api/models").json()}

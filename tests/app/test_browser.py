@@ -27,6 +27,8 @@ from typing import Any
 import pytest
 
 from app.browser import CHROMIUM_ARGS, require_chromium
+from planner import figures
+from planner.experiment import Trial, run_trial
 from tests.app.viser_client import viser_client
 
 playwright_api = pytest.importorskip("playwright.sync_api")
@@ -181,9 +183,10 @@ def _launch(page: Any, scene: str, planner: str, budget: str = "120") -> str:
 
 
 def _wait_finished(page: Any, run_id: str) -> None:
-    """Until the page shows run ``run_id``, no longer live (its last event arrived)."""
+    """Until the page shows run ``run_id`` whole: its last event arrived (the page read it in
+    bulk when it was over, or followed it live to its end)."""
     page.wait_for_function(
-        "id => window.dashboard.state().runId === id && !window.dashboard.state().live",
+        "id => window.dashboard.state().runId === id && window.dashboard.state().done",
         arg=run_id,
         timeout=RUN_TIMEOUT_MS,
     )
@@ -287,13 +290,20 @@ def _check_charts(page: Any, run: dict[str, Any], events: list[dict[str, Any]]) 
     page.click("#btn-last")
     queries = page.locator("#chart-queries")
     total = sum(c["ok"] + c["failed"] for c in run["query_counts"].values())
+    assert total == run["queries"]  # the run's count is the store's (reused answers apart)
+    reused = sum(
+        1 for e in events if e["type"] == "stream_queried" and e["reused_from"] is not None
+    )
     page.wait_for_function(
         "document.getElementById('chart-queries').dataset.bars === "
         f"'{len(run['query_counts'])}' && document.getElementById('chart-queries')"
-        f".textContent.includes('Queries per stream ({total})')"
+        f".dataset.queries === '{total}'"
     )
-    expect(queries.locator(".legendtext")).to_have_count(2)
-    assert sorted(queries.locator(".legendtext").all_text_contents()) == ["failed", "ok"]
+    expect(queries).to_have_attribute("data-reused", str(reused))
+    expect(page.locator("[data-testid=header-queries]")).to_have_text(str(total))
+    legend = ["failed", "ok"] + (["reused (no sampler)"] if reused else [])
+    expect(queries.locator(".legendtext")).to_have_count(len(legend))
+    assert sorted(queries.locator(".legendtext").all_text_contents()) == sorted(legend)
     assert queries.locator(".bars path").count() >= len(run["query_counts"])
     for stream in run["query_counts"]:
         expect(queries).to_contain_text(stream)
@@ -479,7 +489,7 @@ def _record_reuse_run(db: Path) -> str:
     first, second = search.query(top), search.query(top)
     search.query(first)
     search.query(second)  # the same motion from the other IK child: reused
-    queries = len(search.queries)
+    queries = sum(1 for _, r in search.queries if not r.reused)  # as the planners count them
     search.emitter.emit(
         RunFinished,
         status="timeout",
@@ -527,6 +537,23 @@ def test_a_reused_query_is_shown_as_reused(page: Any, server: Server) -> None:
         e for e in events if e["type"] == "stream_queried" and e["node_id"] == query["reused_from"]
     )
     assert original["reused_from"] is None  # the original ran its sampler
+
+    # One count of queries everywhere (planner/figures.py): the samplers that ran; the reused
+    # answer is counted apart, in the header and the chart alike, and the list says the same.
+    run = server.api(f"/api/runs/{run_id}")
+    sampled = sum(1 for e in events if e["type"] == "stream_queried" and e["reused_from"] is None)
+    assert run["queries"] == sampled
+    page.click("#btn-last")
+    expect(page.locator("[data-testid=header-queries]")).to_have_text(str(sampled))
+    expect(page.locator("[data-testid=run-header-figures]")).to_contain_text("(+1 reused)")
+    chart = page.locator("#chart-queries")
+    expect(chart).to_have_attribute("data-queries", str(sampled))
+    expect(chart).to_have_attribute("data-reused", "1")
+    expect(chart).to_contain_text(f"Queries per stream ({sampled}; 1 reused answers apart)")
+    expect(chart.locator(".legendtext", has_text="reused (no sampler)")).to_have_count(1)
+    expect(page.locator(f'#runs-list [data-run-id="{run_id}"]')).to_contain_text(
+        f"{sampled} queries"
+    )
 
 
 def _watch_bench(page: Any) -> None:
@@ -663,15 +690,15 @@ def test_benchmark_compare_train_and_run_from_the_page(page: Any, server: Server
     bench = server.api(f"/api/benchmarks/{bench_id}")
     summary = bench["summary"]
     table = page.locator("[data-testid=bench-table]")
-    for planner, figures in summary["planners"].items():
-        expect(table.locator(f'tr[data-planner="{planner}"]')).to_contain_text(
-            f"{figures['solved']} ("
-        )
+    for planner, row in summary["planners"].items():
+        expect(table.locator(f'tr[data-planner="{planner}"]')).to_contain_text(f"{row['solved']} (")
     paired = summary["paired"]["learned"]["total_censored"]
     paired_row = page.locator('[data-testid=bench-paired] tr[data-planner="learned"]')
     shown = paired_row.locator("[data-measure=total]")
     expect(shown).to_contain_text(_improvement_words(paired))
     expect(shown).to_contain_text(f"{paired['n']} seeds")
+    # Three seeds: the interval says it is rough (planner.figures.MIN_INTERVAL_SEEDS).
+    expect(shown.locator("[data-testid=interval-note]")).to_have_text("rough: only 3 seeds")
 
     # The scatter: a point per seed; a hover names the seed under the mouse (every seed there,
     # where points overlap: test_overlapping_points_...); a click opens the nearest seed's two
@@ -926,3 +953,391 @@ def test_the_horizon_panel_draws_a_series_and_opens_its_benchmarks(
     page.wait_for_function(f"location.hash === '#bench={ids[1]}'")
     page.wait_for_function(f"(document.body.dataset.bench ?? '').startsWith('{ids[1]}:')")
     expect(page.locator("[data-testid=bench-head]")).to_contain_text("tabletop-2")
+
+
+# --- the tree reads; skeletons come with word; one count of each figure ------------------------
+
+
+def _synthetic_run(db: Path) -> tuple[str, list[dict[str, Any]]]:
+    """Record, into the server's store, a finished run made of events written here (the store
+    takes any valid events): the skeleton source's progress before the first skeletons, a plan
+    node with five failed IK queries and one that binds, a motion and a reused one, then the
+    source at work again mid-search and a later batch of skeletons (skeletons_added). Returns
+    its id and events."""
+    from planner.events import event_from_dict
+    from planner.store import RunStore
+
+    with RunStore(db) as store:
+        run_id = store.create_run("line-2", 0, "learned", {})
+    events: list[dict[str, Any]] = []
+
+    def emit(kind: str, **fields: Any) -> None:
+        seq = len(events)
+        events.append({"type": kind, "run_id": run_id, "seq": seq, "t": 0.1 * seq, **fields})
+
+    def plan(index: int, streams: list[str]) -> dict[str, Any]:
+        return {"index": index, "cost": 2.0, "actions": [f"(act{index} b3)"], "streams": streams}
+
+    def query(node: int, stream: str, ok: bool, **more: Any) -> None:
+        emit(
+            "stream_queried",
+            node_id=node,
+            stream=stream,
+            input_names=["?b", "?p"],
+            inputs=["b3", "p0"],
+            input_labels=["block b3", "pose p0"],
+            success=ok,
+            wall_s=0.25 if ok else 0.5,
+            cpu_s=0.2,
+            execution_s=2.5 if ok and stream == "plan-motion" else 0.0,
+            error=None,
+            reason=None if ok else "no IK solution",
+            **more,
+        )
+
+    def node(node_id: int, parent: int, plan_index: int, depth: int, stream: str | None,
+             ok: bool = True) -> None:  # fmt: skip
+        emit(
+            "node_added",
+            node_id=node_id,
+            parent_id=parent,
+            plan_index=plan_index,
+            depth=depth,
+            stream=stream,
+            success=ok,
+            outputs=[[1.0, 2.0]] if stream is not None and ok else [],
+            output_names=[f"?q{node_id}"] if stream is not None and ok else [],
+            label=f"{stream or 'plan'} #{node_id}",
+        )
+
+    def predict(node_id: int, q: float) -> None:
+        emit("model_prediction", node_id=node_id, p_s=0.8, r_s=0.3, r_f=0.6, r_m=2.0, q=q)
+
+    emit("run_started", scene="line-2", seed=0, planner="learned", config={})
+    emit("skeleton_progress", phase="instantiate", message="instantiating 120 streams", seconds=0.5)
+    emit("skeleton_progress", phase="search", message="searching for skeletons", seconds=1.2)
+    emit(
+        "abstract_plans_found",
+        plans=[plan(0, ["inverse-kinematics", "plan-motion"]), plan(1, ["sample-grasp"])],
+        seconds=1.5,
+    )
+    node(1, 0, 0, 0, None)
+    predict(1, 10.0)
+    for failed in range(2, 7):  # a fan of five failed IK queries
+        query(failed, "inverse-kinematics", False)
+        node(failed, 1, 0, 1, "inverse-kinematics", ok=False)
+    query(7, "inverse-kinematics", True)
+    node(7, 1, 0, 1, "inverse-kinematics")
+    predict(7, 5.0)
+    query(8, "plan-motion", True)
+    node(8, 7, 0, 2, "plan-motion")
+    query(9, "plan-motion", True, reused_from=8)  # no sampler ran
+    node(9, 7, 0, 2, "plan-motion")
+    emit("skeleton_progress", phase="replan", message="replanning without ik(b3 p0)", seconds=0.3)
+    emit(
+        "skeletons_added",
+        plans=[plan(2, ["sample-grasp", "inverse-kinematics"])],
+        seconds=0.4,
+        reason="all dead",
+        learned=["ik(b3 p0) exhausted"],
+    )
+    node(10, 0, 2, 0, None)
+    emit(
+        "run_finished",
+        status="timeout",
+        planning_s=3.0,
+        execution_s=None,
+        oracle_s=None,
+        queries=7,
+        message="no plan (timeout)",
+        skeleton_s=1.9,
+    )
+    with RunStore(db) as store:
+        store.write_events(run_id, [event_from_dict(e) for e in events])
+        store.finish_run(run_id, "timeout", planning_s=3.0, queries=7, message="no plan (timeout)")
+    return run_id, events
+
+
+def _open_run(page: Any, server: Server, run_id: str) -> None:
+    """Open the page afresh on run ``run_id`` and wait until all of it is shown."""
+    page.goto("about:blank")
+    page.goto(f"{server.url}/#run={run_id}")
+    page.wait_for_function(
+        "id => window.dashboard.state().runId === id && window.dashboard.state().done", arg=run_id
+    )
+
+
+def test_a_finished_run_opens_in_bulk_and_its_tree_reads(page: Any, server: Server) -> None:
+    """A finished run is read in pages and shown as finished (no websocket, never a live
+    badge); its rows are labelled by stream, failed fans folded, nodes found by stream, object
+    or id; the inspector puts the model's prediction beside what the query did; the skeleton
+    source's word shows at the steps where it worked; the figures agree."""
+    run_id, events = _synthetic_run(server.db)
+    sockets: list[str] = []
+    pages: list[str] = []
+    page.on("websocket", lambda ws: sockets.append(ws.url) if "/api/runs/" in ws.url else None)
+    page.on("request", lambda r: pages.append(r.url) if "/events?" in r.url else None)
+    page.evaluate(
+        """() => {
+            window.__badge = [];
+            const badge = document.getElementById("live-badge");
+            new MutationObserver(() => window.__badge.push(!badge.hidden)).observe(
+                badge, { attributes: true, attributeFilter: ["hidden"] });
+        }"""
+    )
+    page.evaluate("id => window.dashboard.selectRun(id)", run_id)
+    page.wait_for_function(
+        "id => window.dashboard.state().runId === id && window.dashboard.state().done", arg=run_id
+    )
+    state = _state(page)
+    assert state["last"] == len(events) - 1 and state["step"] == state["last"]
+    assert not state["live"] and sockets == [] and True not in page.evaluate("window.__badge")
+    assert pages and all(f"/api/runs/{run_id}/events?" in url for url in pages)
+    expect(page.locator("#live-badge")).to_be_hidden()
+
+    # One count of queries: the header, the chart and the list; reused answers apart.
+    expect(page.locator("[data-testid=header-queries]")).to_have_text("7")
+    expect(page.locator("[data-testid=run-header-figures]")).to_contain_text("(+1 reused)")
+    expect(page.locator("#chart-queries")).to_have_attribute("data-queries", "7")
+    expect(page.locator("#chart-queries")).to_have_attribute("data-reused", "1")
+    expect(page.locator("[data-testid=header-skeletons]")).to_have_text(
+        "3 skeletons (1 arrived during the search)"
+    )
+    assert state["skeletons"] == 3 and state["queries"] == 7 and state["reused"] == 1
+
+    # Rows are labelled by what they hold; the five failed IK queries are one fan.
+    page.click("#btn-fit")
+    rows = {r["level"]: r["name"] for r in page.evaluate("window.dashboard.rows()")}
+    assert rows == {0: "root", 1: "stream plans", 2: "inverse-kinematics", 3: "plan-motion"}
+    assert state["fans"] == 1
+    fan = page.evaluate("window.dashboard.fanPosition(1)")
+    folded = [page.evaluate(f"window.dashboard.nodePosition({n})") for n in range(2, 7)]
+    assert all(p == folded[0] for p in folded)  # one slot
+    page.mouse.click(fan["x"], fan["y"])  # a click opens it
+    page.wait_for_function("window.dashboard.state().fans === 0")
+    opened = {json.dumps(page.evaluate(f"window.dashboard.nodePosition({n})")) for n in range(2, 7)}
+    assert len(opened) == 5
+
+    # Search: by node id, by object, by stream; the first match is selected and shown.
+    assert page.evaluate("window.dashboard.search('#7')") == [7]
+    expect(page.locator("[data-testid=inspector-node]")).to_have_text(re.compile(r"^#7 "))
+    expect(page.locator("#search-count")).to_have_text("1 of 1 match")
+    by_object = page.evaluate("window.dashboard.search('b3')")
+    assert {1, 2, 7, 8, 9, 10} <= set(by_object)  # inputs and plan actions name b3
+    assert page.evaluate("window.dashboard.search('plan-motion')") == [8, 9]
+    expect(page.locator("#search-count")).to_have_text("1 of 2 matches")
+    page.click("#search-next")
+    page.wait_for_function("window.dashboard.state().selected === 9")
+    assert page.evaluate("window.dashboard.search('no such thing')") == []
+    expect(page.locator("#search-count")).to_have_text("no match")
+
+    # Predicted beside actual: node 7's query, by node 1's prediction; node 1's next query
+    # against its six children.
+    page.evaluate("window.dashboard.select(7)")
+    pva = page.locator("[data-testid=inspector-pva]")
+    expect(pva.locator("tr[data-row=p_s]")).to_contain_text("0.8")
+    expect(pva.locator("tr[data-row=p_s]")).to_contain_text("ok")
+    expect(pva.locator("tr[data-row=r_s] td").nth(1)).to_have_text("250.0 ms")
+    expect(pva.locator("tr[data-row=r_m]")).to_contain_text("2.00 s")
+    page.evaluate("window.dashboard.select(2)")
+    expect(pva.locator("tr[data-row=p_s] td").nth(1)).to_have_text("failed")
+    expect(pva.locator("tr[data-row=r_f] td").nth(1)).to_have_text("500.0 ms")
+    page.evaluate("window.dashboard.select(1)")
+    expect(page.locator("[data-testid=inspector-prediction] tr[data-row=p_s]")).to_contain_text(
+        "1 of 6 ok"
+    )
+    # One Q scale: the legend's is planner.figures', with the selected node's Q on it.
+    legend = page.locator("[data-testid=q-legend]")
+    lo, hi = figures.q_scale([10.0, 5.0]) or (0.0, 0.0)
+    expect(legend).to_have_attribute("data-lo", str(int(lo)))
+    expect(legend).to_have_attribute("data-hi", str(int(hi)))
+    expect(page.locator("[data-testid=q-selected]")).to_have_text("#1: 10.00 s")
+    assert page.evaluate("window.dashboard.colourOf(5)") == list(figures.q_rgb_at(0.0))
+    assert page.evaluate("window.dashboard.colourOf(10)") == list(figures.q_rgb_at(1.0))
+
+    # The skeleton source's word, at the steps where it worked.
+    first = next(i for i, e in enumerate(events) if e["type"] == "skeleton_progress")
+    page.evaluate(f"window.dashboard.step({first})")
+    expect(page.locator("#tree-empty")).to_have_text(
+        "Computing skeletons: instantiating 120 streams (instantiate, 500.0 ms)"
+    )
+    replan = max(i for i, e in enumerate(events) if e["type"] == "skeleton_progress")
+    page.evaluate(f"window.dashboard.step({replan})")
+    note = page.locator("[data-testid=skeleton-note]")
+    expect(note).to_have_text(
+        "Computing more skeletons: replanning without ik(b3 p0) (replan, 300.0 ms)"
+    )
+    page.evaluate(f"window.dashboard.step({replan + 1})")
+    expect(note).to_be_hidden()
+    expect(page.locator("#step-event")).to_contain_text(
+        "1 more skeleton (plan 2) in 400.0 ms, asked for all dead; learned 1: ik(b3 p0) exhausted"
+    )
+    page.evaluate(f"window.dashboard.step({len(events) - 1})")
+    page.evaluate("window.dashboard.select(10)")
+    expect(page.locator("[data-testid=inspector-plan] summary")).to_contain_text(
+        "arrived during the search"
+    )
+
+
+def _canvas_ink(page: Any) -> int:
+    """How many pixels of the tree's canvas are drawn on (not transparent)."""
+    return int(
+        page.evaluate(
+            """() => {
+                const c = document.getElementById("tree-canvas");
+                const data = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+                let n = 0;
+                for (let i = 3; i < data.length; i += 4) if (data[i] !== 0) n += 1;
+                return n;
+            }"""
+        )
+    )
+
+
+def _select_row(page: Any, run_id: str) -> None:
+    page.locator(f'#runs-list [data-run-id="{run_id}"]').click()
+    page.wait_for_function(
+        "id => window.dashboard.state().runId === id && window.dashboard.state().done", arg=run_id
+    )
+
+
+def test_switching_runs_of_three_domains_leaves_nothing_stale(page: Any, server: Server) -> None:
+    """Per-run state has one owner: after a switch of run the inspector, the legend, the
+    search, the 3D view's note of a clicked ghost, the slider and the canvas are the new run's
+    (a run with no events draws nothing, not the last tree), and the 3D view forgets the old
+    run's click; compare offers runs of the same scene first, never another domain's."""
+    runs = {}
+    for name, trial in {
+        "kitchen": Trial("kitchen-1", 0, "learned", 120.0),
+        "tabletop": Trial("tabletop-3", 0, "baseline", 60.0, domain=str(TABLETOP)),
+        "line": Trial("line-2", 0, "baseline", 60.0),
+    }.items():
+        result = run_trial(trial, str(server.db))
+        assert result.status == "solved" and result.run_id is not None, result
+        runs[name] = result.run_id
+    from planner.store import RunStore
+
+    with RunStore(server.db) as store:
+        empty = store.create_run("kitchen-1", 5, "baseline", {})  # no events yet
+    page.reload()
+    page.wait_for_function("document.querySelectorAll('#runs-list [data-run-id]').length >= 4")
+
+    # The kitchen run: a node selected, a search made, a ghost clicked in the 3D view.
+    _select_row(page, runs["kitchen"])
+    kitchen = server.events(runs["kitchen"])
+    qs = [e["q"] for e in kitchen if e["type"] == "model_prediction"]
+    scale = figures.q_scale(qs)
+    assert scale is not None
+    legend = page.locator("[data-testid=q-legend]")
+    expect(legend).to_be_visible()
+    assert float(legend.get_attribute("data-lo") or "nan") == pytest.approx(scale[0])
+    assert float(legend.get_attribute("data-hi") or "nan") == pytest.approx(scale[1])
+    conf = next(
+        e for e in kitchen if e["type"] == "node_added" and e["stream"] == "inverse-kinematics"
+    )
+    page.evaluate("window.dashboard.search('inverse-kinematics')")
+    page.wait_for_function(f"window.dashboard.state().selected === {conf['node_id']}")
+    expect(page.locator("#tree-search")).to_have_value("inverse-kinematics")
+    viewer_url = server.api("/api/health")["viewer_url"]
+    if viewer_url is not None:
+        _wait_viewer_node(server, conf["node_id"])  # the view shows the kitchen run, selected
+        with viser_client(viewer_url) as viser:
+            viser.click("/search/confs", instance_index=0)
+            expect(page.locator("[data-testid=viewer-picked]")).to_contain_text("ghost of node")
+        assert server.api("/api/viewer")["picked"]["run_id"] == runs["kitchen"]
+
+    def nothing_of_the_last_run(run_id: str, events: list[dict[str, Any]]) -> None:
+        nodes = sum(1 for e in events if e["type"] == "node_added")
+        expect(page.locator("#node-count")).to_have_attribute("data-nodes", str(nodes + 1))
+        _expect_step(page, len(events) - 1, len(events) - 1)
+        expect(page.locator("#inspector-hint")).to_be_visible()
+        expect(page.locator("[data-testid=inspector-title]")).to_have_text("Node")
+        expect(page.locator("[data-testid=viewer-picked]")).to_be_hidden()
+        expect(page.locator("#tree-search")).to_have_value("")
+        expect(page.locator("#search-count")).to_have_text("")
+        expect(page.locator("#step-slider")).to_have_attribute("max", str(len(events) - 1))
+        assert _state(page)["selected"] is None and _state(page)["matches"] == 0
+        if viewer_url is not None:  # the view shows this run, and no click of the last one
+            deadline = time.monotonic() + WAIT_MS / 1000
+            while (shown := server.api("/api/viewer"))["run_id"] != run_id:
+                assert time.monotonic() < deadline, shown
+                time.sleep(0.2)
+            assert shown["picked"] is None, shown  # never the last run's, even before it is drawn
+
+    _select_row(page, runs["tabletop"])
+    nothing_of_the_last_run(runs["tabletop"], server.events(runs["tabletop"]))
+    expect(legend).to_be_hidden()  # the baseline predicts nothing: no Q scale of the last run
+
+    # A run with no events yet draws nothing, not the tree of the run shown before.
+    assert _canvas_ink(page) > 0
+    _select_row(page, empty)
+    expect(page.locator("#tree-empty")).to_be_visible()
+    expect(page.locator("#node-count")).to_have_attribute("data-nodes", "0")
+    page.wait_for_function("() => new Promise((ok) => requestAnimationFrame(() => ok(true)))")
+    assert _canvas_ink(page) == 0
+    expect(legend).to_be_hidden()
+
+    _select_row(page, runs["line"])
+    nothing_of_the_last_run(runs["line"], server.events(runs["line"]))
+    # Compare offers a run of the same scene, else nothing chosen: never the kitchen's.
+    compare = page.locator("[data-testid=compare-with]")
+    if compare.count():
+        chosen = compare.input_value()
+        assert chosen == "" or server.api(f"/api/runs/{chosen}")["scene"] == "line-2"
+        assert runs["kitchen"] not in compare.locator("option").evaluate_all(
+            "options => options.map((o) => o.value)"
+        )
+
+    # Back to the kitchen: its own scale again, and nothing selected.
+    _select_row(page, runs["kitchen"])
+    nothing_of_the_last_run(runs["kitchen"], kitchen)
+    assert float(legend.get_attribute("data-lo") or "nan") == pytest.approx(scale[0])
+
+
+def test_the_3d_view_stands_beside_the_tree_or_below_it(page: Any, server: Server) -> None:
+    """At 1600x1000 the 3D view stands beside the tree (the same iframe, never reloaded, moved
+    by a button); at 1280x800 below the stepper. Screenshots of both for docs/dashboard.md."""
+    if server.api("/api/health")["viewer_url"] is None:
+        pytest.skip("this server runs without a 3D view")
+    run_id = _run_with_a_tree(server)
+    page.evaluate("localStorage.removeItem('tamp.sideBySide')")  # the width decides
+    page.set_viewport_size({"width": 1600, "height": 1000})
+    _open_run(page, server, run_id)
+    frame, tree = page.locator("#viewer-frame"), page.locator("#tree-canvas")
+    expect(page.locator("body")).to_have_class(re.compile("side-by-side"))
+    viewer = page.frame_locator("#viewer-frame")
+    viewer.get_by_text("Connected").first.wait_for()
+    notice = viewer.locator(".mantine-Notification-root button")  # "Software WebGL ..."
+    if notice.count():
+        notice.first.click()
+    f, t = frame.bounding_box(), tree.bounding_box()
+    assert f is not None and t is not None
+    assert f["x"] > t["x"] + t["width"] - 1 and abs(f["y"] - t["y"]) < 60  # beside
+    src = frame.get_attribute("src")
+    page.evaluate("window.dashboard.search('inverse-kinematics')")
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / "dashboard-side-by-side.png"))
+    page.click("[data-testid=btn-layout]")
+    expect(page.locator("body")).not_to_have_class(re.compile("side-by-side"))
+    f, t = frame.bounding_box(), tree.bounding_box()
+    assert f is not None and t is not None and f["y"] > t["y"] + t["height"]  # below
+    assert frame.get_attribute("src") == src
+    page.click("[data-testid=btn-layout]")  # back, and remembered
+    expect(page.locator("body")).to_have_class(re.compile("side-by-side"))
+    page.evaluate("localStorage.removeItem('tamp.sideBySide')")
+    page.set_viewport_size({"width": 1280, "height": 800})
+    _open_run(page, server, run_id)
+    expect(page.locator("body")).not_to_have_class(re.compile("side-by-side"))
+    page.screenshot(path=str(ARTIFACTS / "dashboard-1280.png"))
+    page.set_viewport_size({"width": 1440, "height": 1000})
+
+
+def _run_with_a_tree(server: Server) -> str:
+    """A solved learned kitchen-2 run in the server's store (made once)."""
+    runs = server.api("/api/runs?planner=learned&status=solved&limit=500")["runs"]
+    mine = [r for r in runs if r["scene"] == "kitchen-2"]
+    if mine:
+        return str(mine[0]["id"])
+    result = run_trial(Trial("kitchen-2", 0, "learned", 120.0), str(server.db))
+    assert result.status == "solved" and result.run_id is not None, result
+    return result.run_id

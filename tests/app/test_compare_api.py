@@ -6,12 +6,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
 
 from app.main import create_app
 from app.settings import Settings
+from planner import figures
 from planner.experiment import Trial, run_trial
 from planner.report import run_time_split
 from planner.store import RunStore
@@ -88,6 +90,7 @@ def test_two_planners_part_at_a_node_both_trees_name(
     assert q and data["q_scale"] is not None
     lo, hi = data["q_scale"]
     assert min(q) <= lo <= hi <= max(q)
+    assert (lo, hi) == figures.q_scale(q)  # the page's own scale (planner/figures.py)
     assert all(v is None for v in trees[a]["q"])  # the baseline predicts nothing
 
 
@@ -140,3 +143,45 @@ def test_unknown_runs_are_404_naming_them(client: TestClient, runs: dict[str, st
     missing = client.get("/api/compare", params={"a": runs["line"]})
     assert missing.status_code == 422
     assert missing.json()["detail"][0]["loc"] == ["query", "b"]
+
+
+def test_skeletons_added_during_the_search_are_in_the_tree(tmp_path: Path) -> None:
+    """Skeletons on demand: a later batch (skeletons_added) adds plan nodes under the root;
+    the tree the page and compare draw lists those plans too, and a node of one is keyed by its
+    actions as the first batch's are."""
+    from app.compare import choice_keys, read_tree
+    from planner.events import AbstractPlansFound, NodeAdded, SkeletonProgress, SkeletonsAdded
+
+    def plan(i: int) -> dict[str, Any]:
+        return {"index": i, "cost": 1.0, "actions": [f"(a{i})"], "streams": ["s"]}
+
+    with RunStore(tmp_path / "runs.db") as store:
+        run_id = store.create_run("line-2", 0, "baseline", {})
+        r, t = run_id, 0.0
+        store.write_events(
+            run_id,
+            [
+                SkeletonProgress(r, 0, t, phase="search", message="searching", seconds=0.1),
+                AbstractPlansFound(r, 1, t, plans=[plan(0), plan(1)], seconds=0.2),
+                SkeletonsAdded(r, 2, t, plans=[plan(2)], seconds=0.1, reason="more"),
+                NodeAdded(
+                    r,
+                    3,
+                    t,
+                    node_id=1,
+                    parent_id=0,
+                    plan_index=2,
+                    depth=0,
+                    stream=None,
+                    success=True,
+                    outputs=[],
+                    label="plan 2",
+                ),
+            ],
+        )
+        tree = read_tree(store, run_id)
+    assert [p["index"] for p in tree.plan_list] == [0, 1, 2]
+    assert tree.ids == [0, 1] and tree.plans == [-1, 2]
+    intern: dict[tuple[object, ...], int] = {}
+    (key,) = choice_keys(tree, intern)
+    assert any(k[-1] == ("plan", ("(a2)",)) for k in intern if intern[k] == key)

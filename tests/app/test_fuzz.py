@@ -22,6 +22,7 @@ import pytest
 import schemathesis
 from fastapi.testclient import TestClient
 from hypothesis import HealthCheck, settings
+from schemathesis.checks import negative_data_rejection
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 
 from app.catalog import NAME
@@ -134,12 +135,23 @@ def documented_refusals(ctx: Any, response: Any, case: schemathesis.Case) -> boo
     return None
 
 
+def refused(ctx: Any, response: Any, case: schemathesis.Case) -> bool | None:
+    """Invalid data is refused: a 4xx the check knows, or a 413 (the documented refusal of a
+    body of more JSON values than the server takes, before it is parsed)."""
+    if response.status_code == 413:
+        detail = response.json()["detail"]
+        assert detail.startswith("request body too large"), detail
+        return None
+    return negative_data_rejection(ctx, response, case)
+
+
 @pytest.mark.slow
 @schema.parametrize()
 @settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
 def test_the_api_honours_its_schema(case: schemathesis.Case) -> None:
     case.call_and_validate(
-        excluded_checks=[positive_data_acceptance], additional_checks=[documented_refusals]
+        excluded_checks=[positive_data_acceptance, negative_data_rejection],
+        additional_checks=[documented_refusals, refused],
     )
 
 

@@ -367,10 +367,27 @@ def test_the_view_renders_in_a_browser_and_plays(
             )
             _still(page, shots["mid"], unlike=shots["start"])
 
-            page.get_by_role("slider").focus()
+            page.get_by_role("slider").first.focus()
             page.keyboard.press("End")
             _until(lambda: viewer.playhead >= duration, "End did not take the plan to its end")
             _still(page, shots["end"], unlike=shots["mid"])
+
+            # The GUI's toggles hide a layer and show it again; the camera buttons frame the
+            # scene and put the camera back where it started.
+            page.get_by_text("grasps ghosts").click()
+            _until(lambda: viewer.layers.get("grasps") is False, "the grasps were not hidden")
+            page.get_by_text("grasps ghosts").click()
+            _until(lambda: viewer.layers.get("grasps") is True, "the grasps were not shown")
+            home = viewer.cameras()
+            page.get_by_role("button", name="Frame the scene").click()
+            _until(lambda: viewer.cameras() != home, "Frame the scene did not move the camera")
+            page.get_by_role("button", name="Reset the camera").click()
+            home_view = viewer._home
+            assert home_view is not None
+            _until(
+                lambda: all(np.allclose(c[0], home_view[0], atol=1e-3) for c in viewer.cameras()),
+                "Reset the camera did not put it back",
+            )
         finally:
             browser.close()
     image = iio.imread(shots["start"])
@@ -558,6 +575,7 @@ def test_a_click_on_a_ghost_names_its_node_to_the_page(tmp_path: Path) -> None:
                 "node_id": confs[1]["node_id"],
                 "label": confs[1]["label"],
                 "count": 1,
+                "run_id": result.run_id,  # the page shows it for this run only
             }
             # ... or only the ray: the ghost it passes nearest, here one straight below it.
             xys = [tuple(c["outputs"][0]["xy"]) for c in confs]
@@ -568,3 +586,111 @@ def test_a_click_on_a_ghost_names_its_node_to_the_page(tmp_path: Path) -> None:
             picked = _wait_picked(client, 2)
             assert (picked["node_id"], picked["count"]) == (below["node_id"], 2)
         assert client.get("/api/viewer").json()["run_id"] == result.run_id
+
+
+def test_another_run_starts_afresh(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    """Per-run state has one owner: showing another run (of the same scene, or of another
+    domain) forgets the ghost clicked, the selected node's highlights and label, puts every
+    camera where the scene starts and the plan back at its beginning."""
+    events, plan = kitchen_run
+    nodes = _nodes(events)
+    ik = next(n for n in nodes.values() if n["stream"] == "inverse-kinematics" and n["success"])
+    with viser_client(viewer.url) as client:
+        _until(lambda: len(viewer.cameras()) == 1, "the client never connected")
+        viewer.show("kitchen-1", 0, events, plan, focus=ik["node_id"], run_id="run-a")
+        home = viewer.cameras()[0]
+        assert "/focus/label" in viewer._layers and viewer.counts["focus"] == ik["node_id"]
+        client.move_camera((4.0, -3.0, 2.5), (0.5, 0.5, 0.5))  # the user turned it
+        _until(lambda: viewer.cameras()[0][0] == pytest.approx((4.0, -3.0, 2.5)), "no turn")
+        client.click("/search/confs", instance_index=0)
+        _until(lambda: viewer.picked is not None, "the click was not seen")
+        assert viewer.picked is not None and viewer.picked.run_id == "run-a"
+        viewer._t = 1.0  # the plan part played
+
+        viewer.show("kitchen-1", 0, events, plan, run_id="run-b")  # same scene, another run
+        assert viewer.picked is None
+        assert viewer.counts["focus"] == -1 and "/focus/label" not in viewer._layers
+        assert viewer.playhead == 0.0
+        (position, look_at), (home_position, home_look) = viewer.cameras()[0], home
+        assert position == pytest.approx(home_position) and look_at == pytest.approx(home_look)
+
+        # A scene of another domain: nothing of the kitchen's selection is left in the scene.
+        viewer.show("kitchen-1", 0, events, plan, focus=ik["node_id"], run_id="run-a")
+        assert "/focus/label" in viewer._layers
+        viewer.show("tabletop-1", 0, [], None, domain=str(TABLETOP), run_id="run-c")
+        assert not [n for n in viewer._layers if n.startswith(("/focus/", "/search/"))]
+        assert viewer.picked is None
+
+
+def test_layers_hide_and_the_plan_plays_at_a_speed_naming_its_action(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    events, plan = kitchen_run
+    viewer.show("kitchen-1", 0, events, plan, run_id="run-a")
+    layers = viewer.layers
+    assert {"failed", "tree", "placements", "grasps", "confs", "motions"} <= set(layers)
+    assert all(layers.values())
+    viewer.set_layer("grasps", False)
+    assert viewer._layers["/search/grasps"].visible is False
+    assert viewer._layers["/search/confs"].visible is True
+    viewer.show("kitchen-1", 0, events, plan, run_id="run-a")  # redrawn: still hidden
+    assert viewer._layers["/search/grasps"].visible is False
+    viewer.set_layer("tree", False)
+    assert all(not h.visible for n, h in viewer._layers.items() if n.startswith("/tree/"))
+    viewer.set_layer("grasps", True)
+    viewer.set_layer("tree", True)
+    assert viewer._layers["/search/grasps"].visible is True
+    legend = viewer._legend.content
+    assert "Ghost colour" in legend and "percentiles 2 and 98" in legend
+
+    duration = viewer.plan_seconds
+    assert duration is not None
+    assert viewer.action == (0, plan["actions"][0])  # the first action, at the start
+    viewer.set_speed("5x")
+    with viewer._lock:
+        viewer._advance(0.1)  # a tick of 0.1 s plays half a second of the plan
+    assert viewer.playhead == pytest.approx(min(0.5, duration))
+    moves = [i for i, a in enumerate(plan["actions"]) if a.startswith("(move")]
+    viewer.set_speed("1x")
+    with viewer._lock:
+        viewer._advance(duration * 0.999 - viewer.playhead)  # near the end
+    index, text = viewer.action or (-1, "")
+    assert index == moves[-1] and text == plan["actions"][index]  # the last move plays
+    assert f"`{text}`" in viewer._plan_note.content
+
+
+def test_the_view_names_no_address_of_its_own(capfd: pytest.CaptureFixture[str]) -> None:
+    """`tamp serve` names the 3D view's address (the gate's): viser's own banner, naming the
+    port only the gate reaches, is not printed."""
+    view = RunViewer(port=0)
+    port = view.url.rpartition(":")[2]
+    view.close()
+    out, err = capfd.readouterr()
+    assert port not in out and port not in err
+    assert "viser" not in out.lower()
+
+
+def test_skeletons_arriving_during_the_search_are_drawn(
+    viewer: RunViewer, kitchen_run: tuple[Events, dict[str, Any]]
+) -> None:
+    """The skeleton source's progress and a later batch of skeletons (with its plan node under
+    the root) are folded like any event: nothing skipped, the new plan node in the tree."""
+    events = kitchen_run[0]
+    base = {"run_id": events[0]["run_id"], "t": events[-1]["t"]}
+    extra = [
+        {"type": "skeleton_progress", "seq": 10**6, "phase": "replan", "message": "m",
+         "seconds": 0.1, **base},
+        {"type": "skeletons_added", "seq": 10**6 + 1, "seconds": 0.2, "reason": "more",
+         "learned": [], "plans": [{"index": 99, "cost": 1.0, "actions": [], "streams": []}],
+         **base},
+        {"type": "node_added", "seq": 10**6 + 2, "node_id": 10**5, "parent_id": 0,
+         "plan_index": 99, "depth": 0, "stream": None, "success": True, "outputs": [],
+         "label": "plan 99", **base},
+    ]  # fmt: skip
+    viewer.show("kitchen-1", 0, events[:-2] + extra, None, run_id="run-skeletons")
+    counts = viewer.counts
+    assert counts["skipped"] == 0 and counts["events"] == len(events) - 2 + len(extra)
+    nodes = sum(1 for e in events[:-2] if e["type"] == "node_added")
+    assert counts["nodes"] == nodes + 2  # the root, and the new plan node

@@ -19,6 +19,7 @@ class RecordingViewer:
 
     def __init__(self) -> None:
         self.calls: list[tuple[str, Any]] = []
+        self.runs: list[str | None] = []  # the run of each show
 
     def show(
         self,
@@ -29,8 +30,10 @@ class RecordingViewer:
         *,
         domain: str | None = None,
         focus: int | None = None,
+        run_id: str | None = None,
     ) -> None:
         self.calls.append(("show", ([e["seq"] for e in events], plan)))
+        self.runs.append(run_id)
 
     picked = None
 
@@ -83,5 +86,6 @@ def test_follows_the_page_then_live_events_then_the_plan(tmp_path: Path) -> None
     hub.end(run_id, "solved")  # the run is over: shown whole, with its plan to animate
     _wait(viewer, 4)
     assert viewer.calls[-1] == ("show", ([0, 1, 2, 3, 4, 5], {"format": "x"}))
+    assert viewer.runs == [run_id] * 3  # the run is named: its state is the view's to reset
     service.close()
     assert viewer.calls[-1] == ("close", None)

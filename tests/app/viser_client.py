@@ -30,6 +30,10 @@ class ViserClient:
     def _send(self, message: _messages.Message) -> None:
         self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
 
+    def move_camera(self, position: Vec3, look_at: Vec3) -> None:
+        """Where the user has turned the camera (the browser reports it as it moves)."""
+        self._send(_camera_message(position, look_at))
+
     def click(
         self,
         name: str,
@@ -72,17 +76,19 @@ def viser_client(url: str) -> Iterator[ViserClient]:
         open_timeout=10,
     ) as ws:
         client = ViserClient(ws)
-        client._send(
-            _messages.ViewerCameraMessage(
-                wxyz=(1.0, 0.0, 0.0, 0.0),
-                position=(0.0, 0.0, 3.0),
-                fov=1.0,
-                near=0.01,
-                far=100.0,
-                image_height=480,
-                image_width=640,
-                look_at=(0.0, 0.0, 0.0),
-                up_direction=(0.0, 0.0, 1.0),
-            )
-        )
+        client._send(_camera_message((0.0, 0.0, 3.0), (0.0, 0.0, 0.0)))
         yield client
+
+
+def _camera_message(position: Vec3, look_at: Vec3) -> _messages.ViewerCameraMessage:
+    return _messages.ViewerCameraMessage(
+        wxyz=(1.0, 0.0, 0.0, 0.0),
+        position=position,
+        fov=1.0,
+        near=0.01,
+        far=100.0,
+        image_height=480,
+        image_width=640,
+        look_at=look_at,
+        up_direction=(0.0, 0.0, 1.0),
+    )

@@ -35,7 +35,14 @@ from planner.domains.panda.robot import (
 )
 from planner.domains.panda.samplers import PandaSamplers
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
-from planner.domains.panda.view import ROBOT, PandaTimeline, PandaView, robot_joints, tool_pose
+from planner.domains.panda.view import (
+    GHOST_PAD,
+    ROBOT,
+    PandaTimeline,
+    PandaView,
+    robot_joints,
+    tool_pose,
+)
 from planner.domains.panda.visuals import panda_kinematics, viewer_urdf
 from planner.pddl.structs import Problem
 from planner.sim.render import render_scene
@@ -284,6 +291,25 @@ def test_each_streams_outputs_are_drawn_in_their_layer(
     assert math.dist(motion.points[0], tool_pose(READY)[0]) < 1e-9
     assert math.dist(motion.points[-1], hand[0]) < 2e-3
     assert len(motion.points) > len(path)  # the hand's curve between waypoints
+
+
+def test_grasp_ghosts_are_sized_to_their_block(
+    problem: Problem, sampled: tuple[str, Grasp, Conf, BlockPose, Conf]
+) -> None:
+    """A grasp's ghost is the hand's slim outline with its pads on the block's faces: as far
+    apart as the block is wide between the fingers, and no part of it big enough to hide the
+    block (the whole hand's ghost, 20 cm across, buried the 4 cm blocks)."""
+    block, grasp, _, _, _ = sampled
+    size = geometry_of(problem).block(block).size
+    (marker,) = VIEW.markers(QueryView("sample-grasp", (block,), (grasp,)), problem)
+    pads = [(c, s) for c, s in marker.parts if s == GHOST_PAD]
+    assert len(pads) == 2
+    across = abs(pads[0][0][1] - pads[1][0][1]) - GHOST_PAD[1]  # inner face to inner face
+    between = size[1] if round(grasp.yaw / (math.pi / 2)) % 2 == 0 else size[0]
+    assert across == pytest.approx(between)
+    volume = size[0] * size[1] * size[2]
+    assert all(s[0] * s[1] * s[2] < volume / 4 for _, s in marker.parts)
+    assert max(abs(c[1]) + s[1] / 2 for c, s in marker.parts) < between / 2 + 0.01
 
 
 def test_failures_and_focus(

@@ -40,7 +40,17 @@ from planner.sim.pr2_model import (
     VELOCITY_LIMITS,
 )
 from planner.sim.transforms import Pose, invert, multiply, planar_pose, wrap_angle
-from planner.view import Body, BodyState, Focus, Marker, QueryView, SceneView, Urdf, Vec3
+from planner.view import (
+    ActionSteps,
+    Body,
+    BodyState,
+    Focus,
+    Marker,
+    QueryView,
+    SceneView,
+    Urdf,
+    Vec3,
+)
 
 T = TypeVar("T")
 Held = tuple[str, Grasp]  # a block in the hand and how it is held
@@ -234,8 +244,10 @@ class KitchenTimeline:
         initial: RobotState,
         final: RobotState,
         geometry: KitchenGeometry,
+        steps: ActionSteps | None = None,
     ) -> None:
         self._phases = tuple(phases)
+        self.steps = steps  # which action plays when
         self._starts = [p.start for p in self._phases]
         self.initial = initial
         self.final = final
@@ -296,8 +308,10 @@ def plan_timeline(
     initial = RobotState(conf.base, conf.torso, conf.arm, None, dict(blocks))
     held: Held | None = None
     phases: list[_Phase] = []
+    starts: list[float] = []
     t = 0.0
     for step, act in enumerate(actions):
+        starts.append(t)
         args = [values.get(a, a) for a in act.args]
         where = f"actions[{step}] {act}"
         if act.name == "move":
@@ -317,7 +331,8 @@ def plan_timeline(
         elif act.name not in STILL_ACTIONS:
             raise ValueError(f"{where}: unknown action {act.name!r}")
     final = RobotState(conf.base, conf.torso, conf.arm, held, dict(blocks))
-    return KitchenTimeline(phases, initial, final, geometry)
+    steps = ActionSteps(tuple(starts), tuple(str(a) for a in actions))
+    return KitchenTimeline(phases, initial, final, geometry, steps)
 
 
 def _arg(args: Sequence[Any], i: int, kind: type[T], where: str) -> T:

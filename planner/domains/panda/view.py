@@ -5,9 +5,10 @@ obstacles as boxes at their seeded start poses, the Panda drawn with its own mes
 the ghosts of sampled values; a bound plan played by the arm.
 
 Ghosts: a placement is a translucent block where it would stand (layer ``placements``), a grasp
-the hand (a compound of translucent boxes: palm, fingers, flange) around the block's start pose
-(``grasps``), an IK result the hand where the configuration puts it (``confs``; translucent too,
-so that a crowd of them leaves the blocks in sight), a motion the
+the hand's slim outline (finger pads on the block's faces, a bar above it, a stub towards the
+flange: :func:`hand_ghost`) at the block's start pose (``grasps``), an IK result the open hand's
+outline where the configuration puts it (``confs``), so that a crowd of them leaves the blocks
+in sight; a motion the
 tool's path through the trajectory (``motions``, the forward kinematics of its waypoints and of
 points between them). A failed query is marked above its input pose, else at the hand of its
 configuration, else above its region, else above the block.
@@ -45,6 +46,7 @@ from planner.domains.panda.visuals import panda_kinematics, viewer_urdf
 from planner.pddl.structs import Problem
 from planner.sim.transforms import Pose, invert, multiply
 from planner.view import (
+    ActionSteps,
     Body,
     BodyState,
     Box,
@@ -62,15 +64,24 @@ ROBOT = "panda"  # the robot's body name
 PICKS = ("pick", "pick-obstacle")
 PATH_STEP = 0.1  # radians (largest joint change) between the points of a drawn tool path
 FAILED_ABOVE = 0.06  # a failed query is marked this far above its block, hand or region
-# The hand in the tool frame (panda_grasptarget: z along the fingers, which close along y),
-# from the Panda's hand and finger meshes: the palm, the two fingers open by FINGER_OPEN each,
-# and the flange it is mounted on.
-HAND_PARTS: tuple[tuple[Vec3, Vec3], ...] = (
-    ((0.0, 0.0, -0.085), (0.063, 0.204, 0.092)),
-    ((0.0, FINGER_OPEN + 0.01, -0.02), (0.021, 0.02, 0.054)),
-    ((0.0, -FINGER_OPEN - 0.01, -0.02), (0.021, 0.02, 0.054)),
-    ((0.0, 0.0, -0.1325), (0.07, 0.07, 0.055)),
-)
+# The hand as a ghost, in the tool frame (panda_grasptarget: z along the fingers, which close
+# along y): the two finger pads, a thin bar joining them above the block, and a stub towards
+# the flange. Slim, so that a crowd of grasps leaves the block in sight (the whole hand's palm
+# and flange, 20 cm across, buried a 4 cm block under its ghosts).
+GHOST_PAD = (0.02, 0.006, 0.03)  # one finger pad: across the finger, thick, along it
+OPEN_WIDTH = 0.05  # between the pads of the empty hand (FINGER_OPEN each, less the pads)
+
+
+def hand_ghost(width: float) -> tuple[tuple[Vec3, Vec3], ...]:
+    """The ghost's boxes ``(centre, size)`` with the pads ``width`` apart, inner face to inner
+    face: a grasp's are on the block's faces."""
+    y = width / 2 + GHOST_PAD[1] / 2
+    return (
+        ((0.0, y, -0.015), GHOST_PAD),
+        ((0.0, -y, -0.015), GHOST_PAD),
+        ((0.0, 0.0, -0.034), (0.006, 2 * y + GHOST_PAD[1], 0.006)),
+        ((0.0, 0.0, -0.062), (0.006, 0.006, 0.05)),
+    )
 
 
 def robot_joints(arm: Sequence[float], fingers: float = FINGER_OPEN) -> dict[str, float]:
@@ -146,13 +157,19 @@ class PandaView:
                 if block is None or block not in initial:
                     continue
                 position, quat = multiply(block_pose_to_pose(initial[block]), value.tool_in_block())
-                out.append(
-                    Marker("grasps", "boxes", position, quat, parts=HAND_PARTS, translucent=True)
-                )
+                parts = hand_ghost(_held_width(blocks[block].size, value))  # on its faces
+                out.append(Marker("grasps", "boxes", position, quat, parts=parts, translucent=True))
             elif isinstance(value, Conf):
                 position, quat = tool_pose(value.arm)
                 out.append(
-                    Marker("confs", "boxes", position, quat, parts=HAND_PARTS, translucent=True)
+                    Marker(
+                        "confs",
+                        "boxes",
+                        position,
+                        quat,
+                        parts=hand_ghost(OPEN_WIDTH),
+                        translucent=True,
+                    )
                 )
             elif isinstance(value, Trajectory):
                 points = tool_path(value.path)
@@ -263,9 +280,15 @@ class PandaTimeline:
     :class:`~planner.view.Timeline`; :meth:`state_at` gives the Panda's own state)."""
 
     def __init__(
-        self, phases: Sequence[_Phase], initial: PlanState, final: PlanState, blocks: Sequence[str]
+        self,
+        phases: Sequence[_Phase],
+        initial: PlanState,
+        final: PlanState,
+        blocks: Sequence[str],
+        steps: ActionSteps | None = None,
     ) -> None:
         self._phases = tuple(phases)
+        self.steps = steps  # which action plays when
         self._starts = [p.start for p in self._phases]
         self.initial = initial
         self.final = final
@@ -323,7 +346,9 @@ def plan_timeline(
     phases: list[_Phase] = []
     t = 0.0
     known = {**problem.values, **values}  # the start's values (q0, start poses) and the plan's
+    starts: list[float] = []
     for step, act in enumerate(actions):
+        starts.append(t)
         args = [known.get(a, a) for a in act.args]
         where = f"actions[{step}] {act}"
         if act.name == "move":
@@ -350,7 +375,8 @@ def plan_timeline(
         else:
             raise ValueError(f"{where}: unknown action {act.name!r}")
     final = PlanState(arm, held, dict(blocks))
-    return PandaTimeline(phases, initial, final, [b.name for b in geometry.blocks])
+    steps = ActionSteps(tuple(starts), tuple(str(a) for a in actions))
+    return PandaTimeline(phases, initial, final, [b.name for b in geometry.blocks], steps)
 
 
 def _arg(args: Sequence[Any], i: int, kind: type[T], where: str) -> T:
