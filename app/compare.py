@@ -58,7 +58,8 @@ class Tree:
     solution: int | None
     plan_list: list[dict[str, Any]]  # abstract_plans_found's plans, then skeletons_added's
     query_t: list[float]  # t of each query a sampler answered (reused ones left out)
-    plans_t: float = 0.0  # t of abstract_plans_found: the top-k planner's seconds
+    plans_t: float = 0.0  # t of abstract_plans_found: the skeleton source's first seconds
+    later_skeletons_s: float = 0.0  # seconds of the skeletons the search asked for after
 
     @property
     def size(self) -> int:
@@ -81,6 +82,7 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
     plan_list: list[dict[str, Any]] = []
     query_t = store.query_times(run_id)
     plans_t: float | None = None
+    later = 0.0
     root, root_label = 0, "root"  # the search does not announce its root; a test may
     for e in events:
         kind = e["type"]
@@ -104,6 +106,7 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
             plans_t = float(e["t"])
         elif kind == "skeletons_added":  # more skeletons during the search, indices following
             plan_list += list(e.get("plans", []))
+            later += float(e.get("seconds", 0.0))
     ids.insert(0, root)  # the root first: node i > 0 is the i-th node made
     return Tree(
         run_id=run_id,
@@ -120,6 +123,7 @@ def read_tree(store: RunStore, run_id: str) -> Tree:
         plan_list=plan_list,
         query_t=query_t,
         plans_t=plans_t or 0.0,
+        later_skeletons_s=later,
     )
 
 
@@ -341,7 +345,7 @@ def time_split(
     planning = record.planning_s
     if planning is None:
         planning = max([plans_at, *tree.query_t[-1:]])
-    split = run_time_split(planning, plans_at, outcomes, search_cpu_s)
+    split = run_time_split(planning, plans_at, outcomes, search_cpu_s, tree.later_skeletons_s)
     return {
         **split,
         "execution_s": record.execution_s,

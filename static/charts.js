@@ -76,7 +76,7 @@ export function drawTime(el, { topk, queries, planning, execution, live }) {
   if (!ready(el)) return;
   const search = Math.max(planning - topk - queries, 0);
   const parts = [
-    ["skeletons (top-k)", topk, "#6366f1"],
+    ["skeletons", topk, "#6366f1"],
     ["stream queries", queries, "#f59e0b"],
     ["search overhead", search, "#94a3b8"],
     ["execution", execution ?? 0, "#0ea5e9"],

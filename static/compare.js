@@ -11,7 +11,7 @@ import { TreeView, shortLabel } from "./treeview.js";
 const PARTED = "#a21caf"; // the ring on the nodes where the searches parted
 const OUTCOME = "#f59e0b"; // the ring on a query both made alike that ended otherwise
 const COLOURS = { a: "#2563eb", b: "#ea580c" };
-const FIXED = { "top-k planning": "#6366f1", "search overhead": "#94a3b8", execution: "#0ea5e9" }; // as charts.js
+const FIXED = { skeletons: "#6366f1", "search overhead": "#94a3b8", execution: "#0ea5e9" }; // as charts.js
 const CONFIG = { displayModeBar: false, responsive: true };
 const FONT = { family: "system-ui, -apple-system, Segoe UI, sans-serif", size: 12, color: "#1f2937" };
 
@@ -141,7 +141,7 @@ export class CompareView {
     if (!window.Plotly) return;
     const parts = (s) => {
       const split = data[s].split;
-      const out = [["top-k planning", split.until_plans_s]];
+      const out = [["skeletons", split.until_plans_s + (split.later_skeletons_s ?? 0)]];
       for (const [stream, secs] of Object.entries(split.queries_by_stream_s)) out.push([`queries: ${stream}`, secs]);
       out.push(["search overhead", Math.max(split.search_s, 0)]);
       out.push(["execution", split.execution_s ?? 0]);

@@ -159,6 +159,24 @@ export class HorizonPanel {
           marker: { color: colors[planner], size: 8 },
         };
       });
+      if (measure === "planning") {
+        // Planning's part spent on skeletons (the skeleton source's seconds, every batch), dashed.
+        for (const planner of series.planners) {
+          const mine = series.points.filter((p) => p.planner === planner && p.skeleton);
+          if (mine.length === 0) continue;
+          traces.push({
+            type: "scatter",
+            mode: "lines",
+            name: `${planner}: skeletons`,
+            legendgroup: planner,
+            showlegend: false,
+            x: mine.map((p) => p.objects),
+            y: mine.map((p) => p.skeleton[0]),
+            hovertemplate: `<b>${escapeHtml(planner)}</b>: %{y:.2f} s of skeletons<extra></extra>`,
+            line: { color: colors[planner], width: 1.5, dash: "dash" },
+          });
+        }
+      }
       const layout = {
         title: { text: title, x: 0.02, font: { size: 13 } },
         font: FONT,

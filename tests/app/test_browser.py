@@ -931,8 +931,15 @@ def test_the_horizon_panel_draws_a_series_and_opens_its_benchmarks(
     )
     for chart, measure in zip(charts, ("planning", "total"), strict=True):
         traces = page.evaluate(
-            f"document.getElementById('{chart}').data.map((t) => [t.name, t.y, t.error_y.array])"
+            f"document.getElementById('{chart}').data.map((t) => [t.name, t.y, t.error_y?.array])"
         )
+        if measure == "planning":  # the skeleton source's share, dashed, after the planners
+            dashed = traces[len(planners) :]
+            assert [t[0] for t in dashed] == [f"{p}: skeletons" for p in planners]
+            for (_, ys, _), planner in zip(dashed, planners, strict=True):
+                mine = [p["skeleton"] for p in series["points"] if p["planner"] == planner]
+                assert ys == pytest.approx([m[0] for m in mine])
+            traces = traces[: len(planners)]
         assert [t[0] for t in traces] == planners  # one line per planner
         for (_, ys, ups), planner in zip(traces, planners, strict=True):
             mine = [p[measure] for p in series["points"] if p["planner"] == planner]
