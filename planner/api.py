@@ -49,7 +49,7 @@ from planner.planners import (
     PlanningTask,
     get_planner,
 )
-from planner.plans import plan_to_dict, validate
+from planner.plans import execution_note, plan_to_dict, validate
 from planner.search.binding import BoundPlan
 from planner.streams.runtime import QueryResult, StreamRuntime
 
@@ -192,21 +192,23 @@ class PlanResult:
             streams=bound.skeleton.stream_plan,
             runtime=self.runtime,
         )
-        return report.ok, report.message
+        note = ""
+        if report.ok and self.loaded.spec.validate is not None:  # the replay adds its own
+            note = execution_note(self.loaded, self.execution_s)
+        return report.ok, report.message + note
 
     def plan_file(self) -> dict[str, Any] | None:
         """The bound plan as a plan file's dict (:mod:`planner.plans`); None when not solved."""
         bound = self.result.bound
         if bound is None:
             return None
-        folder = self.loaded.source.startswith("folder ")
         return plan_to_dict(
             loaded=self.loaded,
             scene=self.result.config.scene,
             seed=self.result.config.seed,
             plan=bound.skeleton,
             values=bound.values,
-            domain_path=str(self.loaded.directory) if folder else None,
+            domain_path=self.loaded.reference,
         )
 
 
@@ -262,8 +264,8 @@ def plan(
     else:
         scene_ref = str(scene)
     domain_ref = None
-    if loaded is not None and loaded.source.startswith("folder "):
-        domain_ref = str(loaded.directory)
+    if loaded is not None and loaded.reference is not None:
+        domain_ref = loaded.reference
     elif isinstance(domain, str):
         domain_ref = domain
     config = RunConfig(

@@ -334,9 +334,7 @@ def build_parser() -> argparse.ArgumentParser:
 def _domain_ref(loaded: LoadedDomain, given: str | None) -> str | None:
     """What a run records of its domain: the folder of one loaded from a path (so any process
     finds it again), the name given, or None (the scene file says)."""
-    if loaded.source.startswith("folder "):
-        return str(loaded.directory)
-    return given
+    return loaded.reference if loaded.reference is not None else given
 
 
 def _plan_json(

@@ -34,6 +34,7 @@ from planner.abstract.skeleton import AbstractPlan
 from planner.domains.spec import LoadedDomain
 from planner.events import Emitter, ModelPrediction, NodeAdded, SolutionFound, StreamQueried
 from planner.pddl.structs import Atom, Problem
+from planner.plans import execution_seconds
 from planner.search.baseline import BaselineConfig
 from planner.search.binding import (
     BoundPlan,
@@ -395,7 +396,9 @@ class SequentialPlanner(Planner):
                 break
         execution_s = oracle_s = None
         if bound is not None:
-            execution_s = sum(float(getattr(v, "seconds", 0.0)) for v in _trajectories(bound))
+            execution_s = execution_seconds(
+                task.samplers, bound.skeleton.actions, bound.skeleton.stream_plan, bound.values
+            )
             oracle_s = recorder.solved(execution_s)
         status = "solved" if bound is not None else "timeout"
         return PlannerOutcome(status, bound, execution_s, oracle_s, queries, tried)
@@ -500,13 +503,6 @@ class _SequentialRecorder:
             oracle_s=oracle,
         )
         return oracle
-
-
-def _trajectories(bound: BoundPlan) -> list[Any]:
-    """The plan's values that take time to execute: those with ``seconds``, as the stream
-    runtime counts a query's execution seconds (planner.streams.runtime)."""
-    used = {a for act in bound.skeleton.actions for a in act.args}
-    return [v for k, v in bound.values.items() if k in used and hasattr(v, "seconds")]
 
 
 # --- the registry ------------------------------------------------------------------------------

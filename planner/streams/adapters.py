@@ -65,6 +65,28 @@ class StreamContext:
         return [(a.predicate, *(self.values.get(x, x) for x in a.args)) for a in facts]
 
 
+def value_key(value: Any) -> Hashable:
+    """A hashable stand-in for a value, equal for equal values: what an adapter's memory of
+    input bindings is keyed on when the caller gives no key. A numpy array is keyed on its
+    dtype, shape and bytes, a list or tuple on its items, a dict on its items; any other
+    unhashable value on its identity."""
+    if isinstance(value, str | int | float | bool | type(None)):
+        return value
+    if isinstance(value, tuple | list):
+        return (type(value).__name__, tuple(value_key(v) for v in value))
+    if isinstance(value, dict):
+        return ("dict", tuple((value_key(k), value_key(v)) for k, v in value.items()))
+    tobytes = getattr(value, "tobytes", None)
+    if callable(tobytes) and hasattr(value, "dtype") and hasattr(value, "shape"):
+        return ("ndarray", str(value.dtype), tuple(value.shape), tobytes())
+    try:
+        hash(value)
+    except TypeError:
+        return ("id", id(value))
+    hashable: Hashable = value
+    return hashable
+
+
 TEST_ANSWERED = "the test answered for these inputs, and its answer does not change"
 TEST_FALSE = "the test says false (and will again for these inputs)"
 

@@ -14,6 +14,7 @@ from planner.api import plan
 from planner.domains import load_domain_folder
 from planner.pddl import Atom, Literal, parse_domain, parse_streams
 from planner.pddl.parser import with_stream_declarations
+from planner.pddl.structs import Exists, ForAll, Imply, Or
 from planner.streams import Failure, StreamBindingError, bind_streams
 from planner.streams.adapters import TEST_ANSWERED, TEST_FALSE
 from planner.streams.pddlstream import (
@@ -136,6 +137,13 @@ def test_a_stream_map_binds_plain_functions_and_ignores_case() -> None:
     assert runtime.query("sample-link", (1,)).outputs == (2,)
     with pytest.raises(StreamBindingError, match="'sample-link' is bound to a plain function"):
         bind_streams(streams, {"sample-link": lambda a: (a,), "closed": bool, "dist": max})
+    # an entry the stream file never declares (a helper kept in the map) is left out, as
+    # PDDLStream does, with a warning that names it; a strict domain refuses it
+    helper = {"sample-link": from_fn(lambda a: (a,)), "closed": bool, "dist": max}
+    helper["collision"] = lambda p, q: p == q
+    assert "collision" not in bind_streams(streams, helper).names
+    with pytest.raises(StreamBindingError, match=r"'collision'.*declares no such stream"):
+        bind_streams(streams, helper, strict=True)
     with pytest.raises(StreamBindingError, match="two bindings for stream 'closed'"):
         bind_streams(streams, {"closed": bool, "CLOSED": bool})
 
@@ -163,10 +171,39 @@ def test_problem_from_pddlstream_init_and_goal() -> None:
         problem_from_init(domain, [("Place", "a"), ("Place", "a", "b")], ("at", "a"))
     with pytest.raises(PDDLStreamProblemError, match=r"init\[0\]: expected a fact such as"):
         problem_from_init(domain, ["Place"], ("at", "a"))
-    with pytest.raises(PDDLStreamProblemError, match=r"goal: \(or ...\) goals are not read"):
-        problem_from_init(domain, [("Place", "a")], ("or", ("at", "a"), ("at", "b")))
+    with pytest.raises(
+        PDDLStreamProblemError, match=r"scene\.json: goal: variable \?q is not quantified"
+    ):
+        problem_from_init(domain, [("Place", "a")], ("at", "?q"), source="scene.json")
     with pytest.raises(PDDLStreamProblemError, match="'a' and 'A' are one name"):
         problem_from_init(domain, [("Place", "a"), ("Place", "A")], ("at", "a"))
+
+
+def test_goals_built_from_python_take_the_whole_language() -> None:
+    """PDDLStream's goals are tuples built in Python: ``or``, ``not`` over a compound,
+    ``imply`` and quantifiers over ``'?x'`` variables become the goal's formulas; the
+    literal conjuncts stay literals."""
+    domain = with_stream_declarations(
+        parse_domain(DOMAIN), parse_streams(STREAMS, parse_domain(DOMAIN))
+    )
+    pose = (1.0, 2.0)
+    problem = problem_from_init(
+        domain,
+        [("Place", "Home"), ("Place", pose), ("at", "Home")],
+        (
+            "and",
+            ("not", ("at", "Home")),
+            ("or", ("at", pose), ("exists", ["?q"], ("and", ("Place", "?q"), ("at", "?q")))),
+            ("forall", ["?q"], ("imply", ("at", "?q"), ("Place", "?q"))),
+        ),
+    )
+    assert problem.goal == (Literal(Atom("at", ("home",)), positive=False),)
+    either, every = problem.goal_conditions
+    assert isinstance(either, Or) and isinstance(either.parts[1], Exists)
+    assert str(either) == "(or (at v0) (exists (?q - object) (and (place ?q) (at ?q))))"
+    assert isinstance(every, ForAll) and isinstance(every.body, Imply)
+    with pytest.raises(PDDLStreamProblemError, match=r"goal\[1\]: expected a variable"):
+        problem_from_init(domain, [("at", "Home")], ("exists", ["q"], ("at", "?q")))
 
 
 @pytest.mark.slow
