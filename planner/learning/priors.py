@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from planner.search.learned import StreamCost
+from planner.streams.adapters import restates_contract
 
 Float64Array = npt.NDArray[np.float64]
 
@@ -114,9 +115,12 @@ class OutcomeLike(Protocol):
 
 
 def priors_from_records(records: Iterable[OutcomeLike]) -> dict[str, Prior]:
-    """Each stream's prior over the given queries."""
+    """Each stream's prior over the given queries, leaving out the answers that only restate
+    an adapter's contract (no sampler ran: :func:`planner.streams.adapters.restates_contract`)."""
     by_stream: dict[str, list[OutcomeLike]] = defaultdict(list)
     for r in records:
+        if not r.success and restates_contract(getattr(r, "reason", None)):
+            continue
         by_stream[r.stream].append(r)
     return {
         stream: Prior.from_outcomes(
@@ -135,6 +139,10 @@ class PriorPredictor:
 
     def prior(self, stream: str) -> Prior:
         return self.priors.get(stream, self.default)
+
+    def trusted(self) -> frozenset[str]:
+        """None: an average tells no query of a stream from another (LearnedConfig.trust)."""
+        return frozenset()
 
     def predict_rows(
         self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]

@@ -211,7 +211,8 @@ class TreeSearch:
         self.exhaustion = exhaustion
         self._reusable = [self._leaves(i) for i in range(len(self.skeletons))] if reuse else []
         # identity -> (node, outputs, wall seconds) of its first success
-        self._results: dict[str, tuple[int, tuple[Any, ...], float]] = {}
+        # (and whether it was the stream's last for those inputs)
+        self._results: dict[str, tuple[int, tuple[Any, ...], float, bool]] = {}
         self.tree = Tree()
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
@@ -283,8 +284,8 @@ class TreeSearch:
         reused_from: int | None = None
         wall_s = 0.0  # what the node's binding cost, for the oracle: the original's seconds
         if earlier is not None:
-            reused_from, outputs_, wall_s = earlier
-            result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True)
+            reused_from, outputs_, wall_s, last = earlier
+            result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True, exhausted=last)
         else:
             result = self.runtime.query(
                 inst.stream, inputs, key=(node.id, inst.stream), context=context
@@ -308,7 +309,9 @@ class TreeSearch:
         if result.exhausted and self.exhaustion:
             node.exhausted = True
         if identity is not None and result.outputs is not None and reused_from is None:
-            self._results.setdefault(identity, (child.id, tuple(result.outputs), result.wall_s))
+            self._results.setdefault(
+                identity, (child.id, tuple(result.outputs), result.wall_s, result.exhausted)
+            )
         if result.success:
             self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))
         if self.emitter is not None:

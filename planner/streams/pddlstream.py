@@ -53,7 +53,7 @@ from planner.pddl.structs import (
     Problem,
     TypedName,
 )
-from planner.streams.adapters import Failure, StreamAdapter
+from planner.streams.adapters import ALL_GIVEN, ONCE, Failure, Last, StreamAdapter
 
 log = logging.getLogger(__name__)
 
@@ -72,8 +72,6 @@ __all__ = [
     "problem_from_init",
 ]
 
-ONCE = "from_fn gives one output for these inputs, and it was given"
-ALL_GIVEN = "from_list_fn's list for these inputs is used up"
 NONE_FOUND = "from_fn found no output for these inputs (and will not)"
 EMPTY_LIST = "from_list_fn's list for these inputs is empty"
 
@@ -110,9 +108,9 @@ def from_fn(fn: Callable[..., Sequence[Any] | None]) -> StreamAdapter:
     """``fn(*inputs)`` returns the output tuple (or ``None``): one output per input binding,
     as PDDLStream's functions; a second query of the same binding finds nothing new."""
 
-    def once(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Failure | None]:
+    def once(*inputs: Any, **kwargs: Any) -> Iterator[Last | Failure]:
         out = fn(*inputs, **kwargs)
-        yield Failure(NONE_FOUND, exhausted=True) if out is None else out
+        yield Failure(NONE_FOUND, exhausted=True) if out is None else Last(tuple(out))
         while True:
             yield Failure(ONCE, exhausted=True)
 
@@ -124,11 +122,13 @@ def from_list_fn(list_fn: Callable[..., Sequence[Sequence[Any]] | None]) -> Stre
     """``list_fn(*inputs)`` returns a list of output tuples, once per input binding; each
     query takes the next one."""
 
-    def each(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Failure | None]:
-        outputs = list_fn(*inputs, **kwargs) or []
+    def each(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Last | Failure]:
+        outputs = list(list_fn(*inputs, **kwargs) or [])
         if not outputs:
             yield Failure(EMPTY_LIST, exhausted=True)
-        yield from outputs
+        yield from outputs[:-1]
+        if outputs:
+            yield Last(tuple(outputs[-1]))
         while True:
             yield Failure(ALL_GIVEN, exhausted=True)
 

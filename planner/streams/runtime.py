@@ -11,6 +11,7 @@ from typing import Any, Protocol, runtime_checkable
 from planner.pddl.structs import Stream, StreamFunction, StreamSet
 from planner.streams.adapters import (
     Failure,
+    Last,
     Outputs,
     StreamAdapter,
     StreamContext,
@@ -58,7 +59,9 @@ class QueryResult:
     error: str | None = None  # set when the sampler raised or returned a malformed result
     reused: bool = False  # the outputs of an identical earlier query; no sampler ran
     reason: str | None = None  # why the sampler found nothing, when it said (a Failure)
-    exhausted: bool = False  # the stream will find nothing more for these inputs (a Failure's)
+    # The stream will find nothing more for these inputs: a Failure's word, or a success that
+    # was the last (an adapters.Last: a PDDLStream function's one output).
+    exhausted: bool = False
     # Seconds to execute the outputs, from the domain's DomainSpec.execution_s; None: the
     # outputs' own ``seconds`` properties.
     duration_s: float | None = None
@@ -290,6 +293,16 @@ class StreamRuntime:
             known = ", ".join(self._functions) or "none"
             raise KeyError(f"unknown function {name!r} (known: {known})") from None
 
+    def state_reads(self) -> dict[str, frozenset[str]]:
+        """Per stream whose sampler cannot read the whole state, the fluents it reads: its
+        declared ``:fluents`` (none for most PDDLStream streams, which read only their inputs).
+        A stream bound with ``context=True`` reads the whole state and is not listed."""
+        return {
+            name: frozenset(bound.declaration.fluents)
+            for name, bound in self._streams.items()
+            if not bound.adapter.uses_context
+        }
+
     def lower_bound(self, name: str) -> float:
         """What planning assumes function ``name`` is worth before its inputs are bound."""
         return self._function(name)[1].lower_bound
@@ -353,6 +366,8 @@ class StreamRuntime:
                 if isinstance(answer, Failure):
                     outputs, reason = None, str(answer.reason)  # stored as text, whatever it was
                     exhausted = answer.exhausted
+                elif isinstance(answer, Last):  # a success, and nothing more for these inputs
+                    outputs, exhausted = tuple(answer.outputs), True
                 else:
                     outputs = answer
         except Exception as exc:  # a sampler's failure is data, not a crash

@@ -15,7 +15,7 @@ from planner.domains import load_domain_folder
 from planner.pddl import Atom, Literal, parse_domain, parse_streams
 from planner.pddl.parser import with_stream_declarations
 from planner.pddl.structs import Exists, ForAll, Imply, Or
-from planner.streams import Failure, StreamBindingError, bind_streams
+from planner.streams import Failure, Last, StreamBindingError, bind_streams
 from planner.streams.adapters import TEST_ANSWERED, TEST_FALSE
 from planner.streams.pddlstream import (
     ALL_GIVEN,
@@ -51,12 +51,12 @@ def test_from_fn_gives_one_output_per_input_binding() -> None:
         return (p + 1,)
 
     adapter = from_fn(ik)
-    assert answers(adapter, 3, 2.0) == [
-        (3.0,),
+    assert answers(adapter, 3, 2.0) == [  # its one output is its last: the search asks no more
+        Last((3.0,)),
         Failure(ONCE, exhausted=True),
         Failure(ONCE, exhausted=True),
     ]
-    assert answers(adapter, 1, 5.0, key="other") == [(6.0,)]
+    assert answers(adapter, 1, 5.0, key="other") == [Last((6.0,))]
     assert calls == [2.0, 5.0]
     assert answers(from_fn(lambda p: None), 2, 1.0) == [
         Failure(NONE_FOUND, exhausted=True),
@@ -85,7 +85,7 @@ def test_generators_lists_samplers_and_constants() -> None:
     assert answers(from_list_gen_fn(batches), 5, 0)[:4] == [(0,), (1,), None, (2,)]
     assert answers(from_list_fn(lambda x: [(x,), (-x,)]), 3, 4) == [
         (4,),
-        (-4,),
+        Last((-4,)),
         Failure(ALL_GIVEN, exhausted=True),
     ]
     assert answers(from_list_fn(lambda x: []), 2, 4) == [
@@ -94,16 +94,16 @@ def test_generators_lists_samplers_and_constants() -> None:
     ]
     draws = iter(range(10))
     assert answers(from_sampler(lambda x: (next(draws),)), 3, 0) == [(0,), (1,), (2,)]
-    assert answers(from_constant((7, 8)), 2, 0) == [(7, 8), Failure(ONCE, exhausted=True)]
+    assert answers(from_constant((7, 8)), 2, 0) == [Last((7, 8)), Failure(ONCE, exhausted=True)]
     assert answers(empty_gen(), 1, 0)[0] == Failure("the generator is exhausted", exhausted=True)
-    assert from_test(negate_test(lambda x: x > 2)).next_outputs((1,), "k") == ()
+    assert from_test(negate_test(lambda x: x > 2)).next_outputs((1,), "k") == Last(())
     said_no = from_test(lambda x: x > 2)
     assert said_no.next_outputs((1,), "k") == Failure(TEST_FALSE, exhausted=True)
     # PDDLStream's tests answer once per input binding: asking again is exhausted at once
     said_yes = from_test(lambda x: x > 2)
-    assert said_yes.next_outputs((3,), "k") == ()
+    assert said_yes.next_outputs((3,), "k") == Last(())
     assert said_yes.next_outputs((3,), "k") == Failure(TEST_ANSWERED, exhausted=True)
-    assert said_yes.next_outputs((3,), "other") == ()
+    assert said_yes.next_outputs((3,), "other") == Last(())
     assert fn_from_constant(2.5)("anything") == 2.5
 
 
