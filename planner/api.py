@@ -78,7 +78,7 @@ class RunConfig:
     budget_s: float = 300.0  # wall-clock budget of the run, top-k included
     attempts: int = 10  # sequential only: queries of one stream before a restart
     restarts: int = 3  # sequential only: restarts of one skeleton before the next
-    model: str | None = None  # model file (default: the domain's own; none: priors)
+    model: str | None = None  # model file (default: the domain's own; none: priors; "priors")
     c_explore: float | None = None  # learned only: UCT exploration weight (default: LearnedConfig)
     # Stream order of the tree searches: "plan" as the actions need them, "model" cheap
     # doubtful tests first by the model (planner/search/order.py), "auto" model for learned.

@@ -43,7 +43,14 @@ from planner.search.binding import (
     shared_states,
     stream_contexts,
 )
-from planner.search.learned import LearnedConfig, LearnedPolicy, Predictor, StreamCost, stream_rows
+from planner.search.learned import (
+    LearnedConfig,
+    LearnedPolicy,
+    Predictor,
+    StreamCost,
+    stream_rows,
+    trusted_streams,
+)
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
 from planner.search.queries import remembered
@@ -54,6 +61,8 @@ from planner.streams.runtime import QueryResult, StreamRuntime
 log = logging.getLogger(__name__)
 
 ORDERS = ("auto", "plan", "model")  # how a tree search orders each stream plan's streams
+# A run's model named so runs on per-stream priors, as if its domain shipped no model.
+PRIORS = "priors"
 
 
 class PlannerConfig(Protocol):
@@ -66,7 +75,7 @@ class PlannerConfig(Protocol):
 
     @property
     def model(self) -> str | None:
-        """The model file; None: the domain's own, else priors."""
+        """The model file; None: the domain's own, else priors; :data:`PRIORS`: priors."""
         ...
 
     @property
@@ -168,8 +177,8 @@ class Planner(ABC):
 def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
     """The cost model of a run: ``config.model``, else the domain's shipped model, else per-stream
     priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning."""
-    path = config.model or loaded.spec.model
-    if path is not None:
+    path = loaded.spec.model if config.model is None else config.model
+    if path is not None and path != PRIORS:
         from planner.learning.predictor import ModelPredictor
 
         return ModelPredictor.load(Path(path), domain=loaded)
@@ -184,12 +193,15 @@ def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
         priors = priors_from_records(records)
         if records:
             source = f"priors from {len(records)} queries recorded in {config.priors_db}"
-    log.warning(
-        "no model for domain %r: the learned search runs on per-stream priors (%s); "
-        "tamp train makes a model from recorded runs",
-        loaded.name,
-        source,
-    )
+    if config.model == PRIORS:
+        log.info("model %r: the learned search runs on per-stream priors (%s)", PRIORS, source)
+    else:
+        log.warning(
+            "no model for domain %r: the learned search runs on per-stream priors (%s); "
+            "tamp train makes a model from recorded runs",
+            loaded.name,
+            source,
+        )
     return PriorPredictor(priors)
 
 
@@ -361,6 +373,8 @@ class LearnedPlanner(_TreeSearchPlanner):
             on_prediction=report,
             evidence_ignore=frozenset(task.loaded.spec.evidence_ignore),
             static_context=task.static_context,
+            reads=task.samplers.state_reads(),
+            trusted=trusted_streams(self.predictor),
         )
 
 

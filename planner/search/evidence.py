@@ -44,6 +44,9 @@ class Evidence:
 
     queries: NodeQueries
     dead_ends: bool = True  # dead_ends
+    # An exhausted node (its stream said it has nothing more for these inputs) with nothing
+    # live below is a dead end at once, whatever its prediction (LearnedConfig.exhausted_dead).
+    exhausted_dead: bool = True
     # Per dead node: its reason (the union of its marks' reasons).
     reasons: dict[int, frozenset[str]] = field(default_factory=dict)
     _seen: int = 0
@@ -97,17 +100,19 @@ class Evidence:
         return found
 
     def _evaluate(self, tree: Tree, node: Node) -> None:
-        """Whether the node's own failures make it a dead end, and why."""
+        """Whether the node's own failures make it a dead end, and why. An exhausted node
+        with nothing live below is one at once (with ``exhausted_dead``): its stream will give
+        nothing more, so its reason is what its failed queries (if any) and the dead ends below
+        it depend on."""
         reason: frozenset[str] | None = None
         first = self.queries.first(node) if node.success and node.depth > 0 else None
-        if (
-            first is not None
-            and node.children
-            and not self._live[node.id]
-            and len(node.children) >= self._threshold_of(node, first)
-        ):
-            below = self._below.get(node.id)
-            reason = frozenset(self.queries.relevant(node)) | frozenset(below or ())
+        if first is not None and node.children and not self._live[node.id]:
+            below = frozenset(self._below.get(node.id) or ())
+            if len(node.children) >= self._threshold_of(node, first):
+                reason = frozenset(self.queries.relevant(node)) | below
+            elif self.exhausted_dead and node.exhausted:
+                failed = any(not tree[c].success for c in node.children)
+                reason = below | (frozenset(self.queries.relevant(node)) if failed else frozenset())
         self._set_source(tree, node.id, node, reason)
 
     # --- marks -------------------------------------------------------------------------------
