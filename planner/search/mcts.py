@@ -210,9 +210,9 @@ class TreeSearch:
         # with nothing live below it is dead, and so is a plan whose nodes all are.
         self.exhaustion = exhaustion
         self._reusable = [self._leaves(i) for i in range(len(self.skeletons))] if reuse else []
-        # identity -> (node, outputs, wall seconds) of its first success
-        # (and whether it was the stream's last for those inputs)
-        self._results: dict[str, tuple[int, tuple[Any, ...], float, bool]] = {}
+        # identity -> (node, outputs, wall seconds) of its first success, whether it was the
+        # stream's last for those inputs and its outputs' execution seconds
+        self._results: dict[str, tuple[int, tuple[Any, ...], float, bool, float]] = {}
         self.tree = Tree()
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
@@ -284,8 +284,10 @@ class TreeSearch:
         reused_from: int | None = None
         wall_s = 0.0  # what the node's binding cost, for the oracle: the original's seconds
         if earlier is not None:
-            reused_from, outputs_, wall_s, last = earlier
-            result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True, exhausted=last)
+            reused_from, outputs_, wall_s, last, moves = earlier
+            result = QueryResult(
+                inst.stream, outputs_, 0.0, 0.0, reused=True, exhausted=last, duration_s=moves
+            )
         else:
             result = self.runtime.query(
                 inst.stream, inputs, key=(node.id, inst.stream), context=context
@@ -310,7 +312,14 @@ class TreeSearch:
             node.exhausted = True
         if identity is not None and result.outputs is not None and reused_from is None:
             self._results.setdefault(
-                identity, (child.id, tuple(result.outputs), result.wall_s, result.exhausted)
+                identity,
+                (
+                    child.id,
+                    tuple(result.outputs),
+                    result.wall_s,
+                    result.exhausted,
+                    result.execution_s,
+                ),
             )
         if result.success:
             self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))

@@ -3,6 +3,7 @@ rules a model can learn (no recorded database, no simulation)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -16,8 +17,10 @@ import torch
 from planner.domains import load_domain
 from planner.learning.features import FEATURE_VERSION, FeatureError, Featurizer
 from planner.learning.model import CostModel, ModelError
+from planner.learning.priors import priors_from_records
 from planner.learning.train import TrainReport, auc, format_report, split_runs, train
 from planner.store import QueryRecord
+from planner.streams.adapters import ONCE
 
 KITCHEN = load_domain("kitchen")  # these are the kitchen's own features (its feature hook)
 PLATFORMS = ("table", "sink", "stove")
@@ -288,6 +291,33 @@ def test_learns_the_synthetic_rules_and_beats_the_prior(
     assert motion.mae_r_m < 0.5 * motion.prior_mae_r_m
     assert "sample-placement" in format_report(report)
     json.dumps(report.to_dict())
+
+
+def test_answers_that_restate_the_contract_are_left_out_and_counted(
+    data: list[QueryRecord],
+) -> None:
+    """A PDDLStream function asked again answers "already given" without running its
+    sampler: no feature can predict that, so such rows are no training rows; the report (and
+    the model file) says per stream how many rows were used and how many left out, and why."""
+    ik = [r for r in data if r.stream == "inverse-kinematics"]
+    restated = [
+        dataclasses.replace(r, id=10_000 + i, success=False, reason=ONCE)
+        for i, r in enumerate(ik[::2])
+    ]
+    model, report = train([*data, *restated], domain=KITCHEN, seed=0, epochs=5)
+    assert report.rows["inverse-kinematics"] == len(ik)
+    assert report.left_out == {"inverse-kinematics": {ONCE: len(restated)}}
+    counts = report.stream("inverse-kinematics")
+    assert counts.n_train + counts.n_val == len(ik)  # the restated rows are in neither
+    text = format_report(report)
+    assert f"inverse-kinematics: {len(ik)} used, {len(restated)} left out" in text
+    assert "only restate the adapter's contract" in text
+    assert model.metadata["left_out"] == {"inverse-kinematics": {ONCE: len(restated)}}
+    with pytest.raises(ValueError, match="only restates its adapter's contract"):
+        train(restated, domain=KITCHEN, seed=0, epochs=5)
+    priors = priors_from_records([*data, *restated])
+    alone = priors_from_records(data)
+    assert priors["inverse-kinematics"] == alone["inverse-kinematics"]
 
 
 def test_predictions_are_batched_and_non_negative(
