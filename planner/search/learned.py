@@ -224,12 +224,13 @@ class LearnedConfig:
     exhausted_dead: bool = True
     """With ``dead_ends``: a node whose stream said it has nothing more for its inputs (an
     exhausted PDDLStream function, test or list) and that has nothing live below it is a dead
-    end at once, its reason what its failed queries and the dead ends below it depend on; so a
-    placement whose every continuation died (a later block's pose failing its collision test
-    against it) is a dead end after as many such tries as its prediction allows, and the
-    search backjumps to the placement the failures depend on. Off: such a node is left alone
-    (it is never queried again) but does not count against the node above it, which keeps
-    re-sampling below a choice that left no room.
+    end at once, its reason what its failed queries and the dead ends below it depend on; and
+    the node above counts each such child as a failure as likely as the predictions of the
+    queries down to where it died say (a placement predicted sure whose collision tests are
+    doubtful may die many times before the placement it collides with is to blame). So a
+    placement that left no room for the next block is backjumped from. Off: an exhausted node
+    is left alone (never queried again) but counts as a live success for the node above,
+    which keeps re-sampling below a choice that left no room (the issue's 4,429 placements).
 
     Measured: see docs/BENCHMARKS.md, *Trusting estimates*."""
 
