@@ -182,17 +182,14 @@ def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
         from planner.learning.predictor import ModelPredictor
 
         return ModelPredictor.load(Path(path), domain=loaded)
-    from planner.learning.priors import PriorPredictor, priors_from_records
+    from planner.learning.priors import Prior, PriorPredictor, priors_from_store
 
-    priors = {}
+    priors: dict[str, Prior] = {}
     source = "no recorded queries: uniform priors"
     if config.priors_db is not None and Path(config.priors_db).is_file():
-        from planner.learning.train import load_records
-
-        records = load_records([Path(config.priors_db)], domain=loaded.name)
-        priors = priors_from_records(records)
-        if records:
-            source = f"priors from {len(records)} queries recorded in {config.priors_db}"
+        priors, queries = priors_from_store(Path(config.priors_db), loaded.name)
+        if queries:
+            source = f"priors from {queries} queries recorded in {config.priors_db}"
     if config.model == PRIORS:
         log.info("model %r: the learned search runs on per-stream priors (%s)", PRIORS, source)
     else:

@@ -9,9 +9,11 @@ what the paper's models predict before they have seen anything. No torch here.
 
 from __future__ import annotations
 
+import logging
 from collections import defaultdict
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -19,6 +21,8 @@ import numpy.typing as npt
 
 from planner.search.learned import StreamCost
 from planner.streams.adapters import restates_contract
+
+log = logging.getLogger(__name__)
 
 Float64Array = npt.NDArray[np.float64]
 
@@ -128,6 +132,30 @@ def priors_from_records(records: Iterable[OutcomeLike]) -> dict[str, Prior]:
         )
         for stream, rs in sorted(by_stream.items())
     }
+
+
+def priors_from_store(path: Path, domain: str) -> tuple[dict[str, Prior], int]:
+    """Each stream's prior over the queries of the runs of ``domain`` (its name) recorded in
+    the store at ``path``, and how many queries that was. Reads only how each query ended (not
+    its inputs or context) and each run's scene once: a learned run on priors pays little for
+    it inside its planning clock, however large the store."""
+    from planner.domains import domain_of_scene, find_scene, load_domain
+    from planner.scene import SceneError
+    from planner.store import RunStore
+
+    with RunStore(path) as store:
+        runs = store.query_runs()
+        domains: dict[tuple[str, str | None], str | None] = {}
+        for scene, ref in set(runs.values()):
+            try:
+                given = load_domain(ref) if ref is not None else None
+                domains[(scene, ref)] = domain_of_scene(find_scene(scene, domain=given), given).name
+            except (OSError, ValueError, KeyError, SceneError) as exc:
+                log.warning("scene %s: cannot load it to tell its domain (%s)", scene, exc)
+                domains[(scene, ref)] = None
+        mine = sorted(run for run, key in runs.items() if domains[key] == domain)
+        outcomes = store.query_outcomes(mine)
+    return priors_from_records(outcomes), len(outcomes)
 
 
 class PriorPredictor:

@@ -278,6 +278,7 @@ class QueryOutcome:
     wall_s: float
     reason: str | None
     error: str | None
+    execution_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -715,6 +716,7 @@ class RunStore:
             QueryRow.wall_s,
             QueryRow.reason,
             QueryRow.error,
+            QueryRow.execution_s,
         )
         out: list[QueryOutcome] = []
         with self.engine.connect() as conn:
@@ -722,6 +724,19 @@ class RunStore:
                 chunk = run_ids[i : i + 500]
                 query = select(*columns).where(QueryRow.run_id.in_(chunk)).order_by(QueryRow.id)
                 out.extend(QueryOutcome(*row) for row in conn.execute(query))
+        return out
+
+    def query_runs(self) -> dict[str, tuple[str, str | None]]:
+        """Per run that has stream queries: its scene and the domain its config names (None:
+        its scene file says), for telling the runs of one domain apart without reading their
+        queries."""
+        has_queries = select(QueryRow.run_id).distinct()
+        query = select(RunRow.id, RunRow.scene, RunRow.config).where(RunRow.id.in_(has_queries))
+        out: dict[str, tuple[str, str | None]] = {}
+        with self.engine.connect() as conn:
+            for run_id, scene, config in conn.execute(query):
+                domain = json.loads(config).get("domain")
+                out[run_id] = (scene, domain if isinstance(domain, str) else None)
         return out
 
     def event_times(self, run_ids: list[str], type_: str) -> dict[str, float]:
