@@ -320,6 +320,28 @@ def test_answers_that_restate_the_contract_are_left_out_and_counted(
     assert priors["inverse-kinematics"] == alone["inverse-kinematics"]
 
 
+def test_a_stream_is_trusted_where_its_validation_beat_its_prior(
+    trained: tuple[CostModel, TrainReport],
+) -> None:
+    """LearnedConfig.trust reads the model file's validation: a stream's predictions are
+    trusted where its network's held-out log loss beat the stream's average."""
+    model, report = trained
+    trusted = model.trusted_streams()
+    assert trusted is not None and "sample-placement" in trusted
+    for s in report.streams:
+        beat = (
+            not s.prior_used
+            and s.log_loss is not None
+            and s.prior_log_loss is not None
+            and s.log_loss < s.prior_log_loss
+        )
+        assert (s.stream in trusted) == beat, s
+    unvalidated = CostModel(
+        model.featurizer, model.networks, model.priors, default_prior=model.default_prior
+    )
+    assert unvalidated.trusted_streams() is None  # a file without figures: trusted throughout
+
+
 def test_predictions_are_batched_and_non_negative(
     trained: tuple[CostModel, TrainReport], data: list[QueryRecord]
 ) -> None:
