@@ -328,6 +328,7 @@ class LearnedPolicy:
     )  # per state object: its fluent facts (one object for equal sets: keys compare by identity)
     _fluent_sets: dict[frozenset[Atom], frozenset[Atom]] = field(default_factory=dict)
     _informed_at: dict[tuple[int, int], bool] = field(default_factory=dict)
+    _trusting: tuple[int, bool] | None = None  # (plans seen, whether any stream is trusted)
 
     def __post_init__(self) -> None:
         c = self.config
@@ -547,11 +548,15 @@ class LearnedPolicy:
 
     @property
     def trusting(self) -> bool:
-        """Whether any stream's predictions are trusted (always, with ``trust`` off)."""
+        """Whether any stream of the plans has trusted predictions (always, with ``trust``
+        off); worked out again only when plans are added."""
         if not self.config.trust or self.trusted is None:
             return True
-        streams = {i.stream for p in self.skeletons for i in p.stream_plan}
-        return bool(streams & self.trusted)
+        if self._trusting is None or self._trusting[0] != len(self.skeletons):
+            trusted = self.trusted
+            found = any(i.stream in trusted for p in self.skeletons for i in p.stream_plan)
+            self._trusting = (len(self.skeletons), found)
+        return self._trusting[1]
 
     def _informed(self, node: Node) -> bool:
         """Whether a trusted prediction informs the choice at ``node``: some stream from its
