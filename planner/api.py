@@ -21,13 +21,18 @@ import logging
 import time
 import uuid
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from planner.abstract import AbstractConfig, plan_abstract
-from planner.abstract.skeleton import AbstractPlan, GroundAction
+from planner.abstract import (
+    DEFAULT_SOURCE,
+    SKELETON_SOURCES,
+    AbstractConfig,
+    PlannerTimeoutError,
+)
+from planner.abstract.skeleton import GroundAction
 from planner.domains import LoadedDomain, load_domain, problem_for_scene
 from planner.domains.spec import PlanCheck
 from planner.events import (
@@ -39,6 +44,7 @@ from planner.events import (
     RunFailed,
     RunFinished,
     RunStarted,
+    SkeletonProgress,
 )
 from planner.pddl.structs import Problem
 from planner.planners import (
@@ -48,6 +54,8 @@ from planner.planners import (
     Budget,
     PlanningTask,
     get_planner,
+    plan_summaries,
+    skeleton_seconds,
 )
 from planner.plans import execution_note, plan_to_dict, validate
 from planner.search.binding import BoundPlan
@@ -86,6 +94,10 @@ class RunConfig:
     domain: str | None = None  # the domain's name or folder; None: the scene file's "domain"
     # Learned with no model for the domain: per-stream priors from this store's queries.
     priors_db: str | None = None
+    # Where skeletons come from (planner.abstract.source): "adaptive" (greedy searches, more
+    # on demand, replanning on what the search proved) or a top-k planner ("kstar", "symk":
+    # the k cheapest at once). A planner spec's "skeletons=..." overrides it.
+    skeletons: str = DEFAULT_SOURCE
 
     def __post_init__(self) -> None:
         spec = get_planner(self.planner)  # ValueError names what is unknown
@@ -99,6 +111,14 @@ class RunConfig:
             raise ValueError(f"unknown stream order {self.order!r} (known: {', '.join(ORDERS)})")
         if spec.name.startswith("sequential") and self.order == "model":
             raise ValueError("order 'model' is for the tree searches (baseline, paper, learned)")
+        if self.skeletons not in SKELETON_SOURCES:
+            known = ", ".join(SKELETON_SOURCES)
+            raise ValueError(f"unknown skeleton source {self.skeletons!r} (known: {known})")
+
+    @property
+    def skeleton_source(self) -> str:
+        """The skeleton source the run uses: its planner spec's, else its own field."""
+        return get_planner(self.planner).skeletons or self.skeletons
 
     @property
     def stream_order(self) -> str:
@@ -121,7 +141,7 @@ class RunResult:
     status: str  # solved, timeout, failed, cancelled
     bound: BoundPlan | None
     planning_s: float  # wall seconds from start (top-k included) to the bound plan or the end
-    topk_s: float
+    topk_s: float  # wall seconds of the skeleton source (every batch): the planning not searched
     execution_s: float | None  # trajectory seconds of the bound plan
     oracle_s: float | None  # top-k + successful queries on the solution branch
     queries: list[QueryResult] = field(repr=False)
@@ -210,19 +230,6 @@ class PlanResult:
             values=bound.values,
             domain_path=self.loaded.reference,
         )
-
-
-def plan_summaries(plans: Sequence[AbstractPlan]) -> list[dict[str, Any]]:
-    """The abstract plans as an ``abstract_plans_found`` event carries them."""
-    return [
-        {
-            "index": i,
-            "cost": p.cost,
-            "actions": [str(a) for a in p.actions],
-            "streams": [str(s) for s in p.stream_plan],
-        }
-        for i, p in enumerate(plans)
-    ]
 
 
 def plan(
@@ -340,6 +347,7 @@ def solve(
         valid=valid,
         plan=plan,
         search_cpu_s=result.search_cpu_s,
+        skeleton_s=result.topk_s,
     )
     return out
 
@@ -363,32 +371,47 @@ def _solve(
     # Stream-file functions (action costs) are valued by the samplers' runtime while planning;
     # without them the runtime is made once the plans are found.
     runtime = loaded.runtime(problem, seed=config.seed) if loaded.streams.functions else None
-    abstract = plan_abstract(
-        loaded.domain,
-        loaded.streams,
-        problem,
-        AbstractConfig(k=config.k, diversity_ignore=loaded.spec.diversity_ignore),
-        progress=progress or (lambda _m: None),
-        functions=runtime,
+    abstract = AbstractConfig(
+        k=config.k,
+        backend=config.skeleton_source,
+        diversity_ignore=loaded.spec.diversity_ignore,
+        timeout_s=config.budget_s,
     )
+    say = progress or (lambda _m: None)
+
+    def word(phase: str, message: str, seconds: float) -> None:
+        emitter.emit(SkeletonProgress, phase=phase, message=message, seconds=seconds)
+        say(message)
+
+    source = abstract.source(
+        loaded.domain, loaded.streams, problem, functions=runtime, progress=word
+    )
+    first_n = min(config.k, abstract.first_batch) if abstract.adaptive else config.k
+    try:
+        first = source.request(first_n)
+    except PlannerTimeoutError:  # the budget ran out before the first skeleton
+        elapsed = time.perf_counter() - start
+        timeout = RunResult(run_id, config, "timeout", None, elapsed, elapsed, None, None, [])
+        return PlanResult(timeout, loaded, problem)
     initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
     initial.update(problem.values)
     planner = get_planner(config.planner)(config)
     task = PlanningTask(
         loaded,
         problem,
-        abstract.plans,
+        first.plans,
         initial,
-        topk_s=abstract.seconds["topk"],
+        topk_s=first.seconds,
         static_context=loaded.static_context(problem),
+        source=source,
+        batch=len(first.plans) or abstract.first_batch,
+        growth=abstract.batch_growth,
     )
     task = planner.prepare(task)
     # The samplers' world is made before the plans are reported, so what follows the report is
     # the search alone (its own seconds and its queries'; docs/BENCHMARKS.md splits them).
     task.runtime = runtime if runtime is not None else loaded.runtime(problem, seed=config.seed)
-    emitter.emit(
-        AbstractPlansFound, plans=plan_summaries(task.plans), seconds=abstract.seconds["total"]
-    )
+    emitter.emit(AbstractPlansFound, plans=plan_summaries(task.plans), seconds=first.seconds)
     budget = Budget(start, start + config.budget_s, progress, should_stop)
     outcome = planner.solve(task, emitter, budget)
     result = RunResult(
@@ -397,7 +420,7 @@ def _solve(
         outcome.status,
         outcome.bound,
         time.perf_counter() - start,
-        task.topk_s,
+        skeleton_seconds(task),
         outcome.execution_s,
         outcome.oracle_s,
         outcome.queries,

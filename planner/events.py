@@ -220,8 +220,9 @@ class StreamQueried(_EventBase):
     # features): {"facts": [[predicate, arg, ...], ...], "values": {name: value}}, plus the
     # domain's static context (the kitchen: {"geometry": {"platforms": ..., "blocks": ...}}).
     context: dict[str, Any] = field(default_factory=dict)
-    # The node whose identical query (same stream, inputs and context) gave these outputs: no
-    # sampler ran, so the store keeps no training row for it. None for a real query.
+    # The node whose identical query gave this answer: no sampler ran, so the store keeps no
+    # training row for it. A success with the same stream, inputs and context, or a test asked
+    # with the same inputs (its answer, failure too, is a function of them). None: a real query.
     reused_from: int | None = None
     # Why a sampler that ran cleanly found nothing, when it said (the kitchen's: "base motion:
     # no path in 150 iterations", "no IK solution ..."); None for a success or an error.
@@ -231,8 +232,8 @@ class StreamQueried(_EventBase):
 
     def _validate(self) -> None:
         self._non_negative("node_id", "wall_s", "cpu_s", "execution_s")
-        if self.reused_from is not None and not self.success:
-            self._fail("reused_from", "only a success is reused")
+        if self.reused_from is not None and not self.success and self.error is not None:
+            self._fail("reused_from", "an error is never reused")
         if not self.stream:
             self._fail("stream", "must not be empty")
         if len(self.inputs) != len(self.input_names):

@@ -29,10 +29,19 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, ClassVar, Protocol
 
+from planner.abstract.errors import PlannerTimeoutError
 from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
+from planner.abstract.source import SKELETON_SOURCES, Feedback, SkeletonSource
 from planner.domains.spec import LoadedDomain
-from planner.events import Emitter, ModelPrediction, NodeAdded, SolutionFound, StreamQueried
+from planner.events import (
+    Emitter,
+    ModelPrediction,
+    NodeAdded,
+    SkeletonsAdded,
+    SolutionFound,
+    StreamQueried,
+)
 from planner.pddl.structs import Atom, Problem
 from planner.plans import execution_seconds
 from planner.search.baseline import BaselineConfig
@@ -43,6 +52,7 @@ from planner.search.binding import (
     shared_states,
     stream_contexts,
 )
+from planner.search.feedback import InstanceRecords
 from planner.search.learned import (
     LearnedConfig,
     LearnedPolicy,
@@ -108,10 +118,16 @@ class PlanningTask:
     problem: Problem
     plans: tuple[AbstractPlan, ...]
     initial: dict[str, Any]  # object name -> value (a name stands for itself)
-    topk_s: float  # seconds the top-k planner took
+    topk_s: float  # seconds the skeleton source took for the first plans
     static_context: dict[str, Any] = field(default_factory=dict)
     states: list[list[frozenset[Atom]]] = field(default_factory=list)
     runtime: StreamRuntime | None = None  # set once the plans are reported, before solve()
+    # Where more plans come from during the search (None: the plans above are all there is),
+    # and how many to ask for: the first batch's size times ``growth`` per request made.
+    source: SkeletonSource | None = None
+    batch: int = 10
+    growth: float = 2.0
+    doubt_after: int = 8  # a stream instance queried this often with no success is doubted
     # The domain's encoder, once per value object, shared by the search, its events and the
     # learned policy (planner.search.queries.remembered).
     encode: Callable[[Any], Any] = field(init=False, repr=False)
@@ -203,6 +219,17 @@ def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
 
 
 def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
+    """The task with every stream plan reordered by the model (:func:`ordered_by_model`)."""
+    task.plans, task.states = ordered_by_model(task, task.plans, task.states, predictor)
+    return task
+
+
+def ordered_by_model(
+    task: PlanningTask,
+    plans: Sequence[AbstractPlan],
+    states: Sequence[Sequence[frozenset[Atom]]],
+    predictor: Predictor,
+) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]]]:
     """Every stream plan reordered by the model's predictions before anything is bound
     (:mod:`planner.search.order`), in one batch.
 
@@ -213,7 +240,7 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
     fluents = task.fluents
     spans: list[list[int]] = []
     rows: list[tuple[str, list[Any | None], dict[str, Any]]] = []
-    for plan, plan_states in zip(task.plans, task.states, strict=True):
+    for plan, plan_states in zip(plans, states, strict=True):
         span = []
         for i, inst in enumerate(plan.stream_plan):
             key = (inst, frozenset(a for a in plan_states[i] if a.predicate in fluents))
@@ -235,13 +262,12 @@ def model_order(task: PlanningTask, predictor: Predictor) -> PlanningTask:
     out_plans: list[AbstractPlan] = []
     out_states: list[list[frozenset[Atom]]] = []
     unread: Mapping[str, Collection[str]] = task.loaded.spec.unread
-    for plan, plan_states, span in zip(task.plans, task.states, spans, strict=True):
+    for plan, plan_states, span in zip(plans, states, spans, strict=True):
         scores = [seconds_per_failure(costs[j]) for j in span]
         ordered, ordered_states = order_streams(plan, plan_states, task.fluents, scores, unread)
         out_plans.append(ordered)
         out_states.append(ordered_states)
-    task.plans, task.states = tuple(out_plans), out_states
-    return task
+    return tuple(out_plans), out_states
 
 
 # --- the tree searches -------------------------------------------------------------------------
@@ -253,20 +279,29 @@ class _TreeSearchPlanner(Planner):
     def __init__(self, config: PlannerConfig) -> None:
         super().__init__(config)
         self.predictor: Predictor | None = None
+        self._seen_states: dict[frozenset[Atom], frozenset[Atom]] = {}
 
     @property
     def order(self) -> str:
         return "plan" if self.config.order == "auto" else self.config.order
 
     def prepare(self, task: PlanningTask) -> PlanningTask:
-        task.states = shared_states(
-            [stream_contexts(p, task.loaded.domain, task.problem) for p in task.plans]
-        )
         if self.uses_model or self.order == "model":
             self.predictor = load_predictor(self.config, task.loaded)
-        if self.predictor is not None and self.order == "model":
-            task = model_order(task, self.predictor)
+        task.plans, task.states = self.prepare_plans(task, task.plans)
         return task
+
+    def prepare_plans(
+        self, task: PlanningTask, plans: Sequence[AbstractPlan]
+    ) -> tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]]]:
+        """Stream plans as the search reads them: each stream's symbolic state (one object
+        per distinct state, across every batch), in the model's stream order where the
+        planner orders by model."""
+        states = [stream_contexts(p, task.loaded.domain, task.problem) for p in plans]
+        states = shared_states(states, self._seen_states)
+        if self.predictor is not None and self.order == "model":
+            return ordered_by_model(task, plans, states, self.predictor)
+        return tuple(plans), states
 
     def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
         return BaselinePolicy(BaselineConfig())
@@ -277,8 +312,12 @@ class _TreeSearchPlanner(Planner):
         return True
 
     def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome:
+        feed = None
+        if task.source is not None:
+            feed = SourceFeed(task, self.prepare_plans, emitter, budget)
+        fluent_streams = frozenset(s.name for s in task.loaded.streams.streams if s.fluents)
         search = TreeSearch(
-            task.plans,
+            list(task.plans),
             task.states,
             task.initial,
             task.samplers,
@@ -292,6 +331,9 @@ class _TreeSearchPlanner(Planner):
             static_context=task.static_context,
             reuse=True,
             exhaustion=self.exhaustion,
+            feed=feed,
+            fluent_streams=fluent_streams,
+            doubt_after=task.doubt_after,
         )
         outcome = search.run(deadline=budget.deadline, start=budget.start)
         queries = [r for _, r in outcome.queries if not r.reused]
@@ -299,13 +341,13 @@ class _TreeSearchPlanner(Planner):
         bound = None
         execution_s = oracle_s = None
         if outcome.solved and outcome.plan_index is not None:
-            skeleton = task.plans[outcome.plan_index]
+            skeleton = search.skeletons[outcome.plan_index]
             values = {**task.initial, **outcome.values}
             cost = plan_cost(skeleton, task.loaded.domain, task.problem, values, task.runtime)
             bound = BoundPlan(skeleton, values, cost)
             branch = set(search.tree.path(outcome.node_id or 0))
             execution_s = sum(r.execution_s for n, r in outcome.queries if n in branch)
-            oracle_s = task.topk_s + outcome.oracle_query_s
+            oracle_s = skeleton_seconds(task) + outcome.oracle_query_s
         return PlannerOutcome(
             outcome.status,
             bound,
@@ -375,6 +417,103 @@ class LearnedPlanner(_TreeSearchPlanner):
         )
 
 
+# --- skeletons on demand ---------------------------------------------------------------------
+
+
+def plan_summaries(plans: Sequence[AbstractPlan]) -> list[dict[str, Any]]:
+    """The abstract plans as an ``abstract_plans_found`` event carries them."""
+    return [
+        {
+            "index": i,
+            "cost": p.cost,
+            "actions": [str(a) for a in p.actions],
+            "streams": [str(s) for s in p.stream_plan],
+        }
+        for i, p in enumerate(plans)
+    ]
+
+
+def skeleton_seconds(task: PlanningTask) -> float:
+    """Wall seconds the run's skeleton source worked (every batch), or the first plans'."""
+    if task.source is not None:
+        return task.source.seconds.get("total", task.topk_s)
+    return task.topk_s
+
+
+class SourceFeed:
+    """The search's :class:`~planner.search.mcts.SkeletonFeed`: asks the task's skeleton source
+    for more (each batch ``growth`` times the last), prepares what comes as the planner
+    prepared the first plans, and reports it as a ``skeletons_added`` event."""
+
+    def __init__(
+        self,
+        task: PlanningTask,
+        prepare: Callable[
+            [PlanningTask, Sequence[AbstractPlan]],
+            tuple[tuple[AbstractPlan, ...], list[list[frozenset[Atom]]]],
+        ],
+        emitter: Emitter,
+        budget: Budget,
+    ) -> None:
+        assert task.source is not None
+        self.task = task
+        self.source = task.source
+        self.prepare = prepare
+        self.emitter = emitter
+        self.budget = budget
+        self.count = len(task.plans)
+        self.batch = float(task.batch)
+
+    @property
+    def requests(self) -> int:
+        return self.source.requests
+
+    @property
+    def seconds(self) -> float:
+        return self.source.seconds.get("total", 0.0)
+
+    def exhausted_for(self, feedback: Feedback) -> bool:
+        return self.source.exhausted_for(feedback)
+
+    def more(
+        self, reason: str, feedback: Feedback
+    ) -> list[tuple[AbstractPlan, list[frozenset[Atom]]]]:
+        self.batch *= self.task.growth
+        n = max(1, min(round(self.batch), MAX_BATCH))
+        remaining = self.budget.deadline - time.perf_counter()
+        self.source.timeout_s = max(remaining, 1.0)
+        if self.budget.progress is not None:
+            self.budget.progress(f"asking for {n} more skeletons ({reason})")
+        try:
+            batch = self.source.request(n, feedback)
+        except PlannerTimeoutError:
+            log.info("the skeleton source ran out of the run's time")
+            return []
+        plans, states = self.prepare(self.task, batch.plans)
+        summaries = plan_summaries(plans)
+        for entry in summaries:
+            entry["index"] += self.count
+        self.emitter.emit(
+            SkeletonsAdded,
+            plans=summaries,
+            seconds=batch.seconds,
+            reason=reason,
+            learned=feedback.lines(),
+        )
+        self.count += len(plans)
+        log.info(
+            "%d more skeletons (%s) in %.2f s, %d facts fed back",
+            len(plans),
+            reason,
+            batch.seconds,
+            len(feedback.false) + len(feedback.doubted),
+        )
+        return list(zip(plans, states, strict=True))
+
+
+MAX_BATCH = 400  # skeletons in one request at most, however often the search asked
+
+
 # --- the sequential binder ---------------------------------------------------------------------
 
 
@@ -382,15 +521,43 @@ class SequentialPlanner(Planner):
     name = "sequential"
 
     def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome:
-        recorder = _SequentialRecorder(emitter, task, budget.start)
+        plans = list(task.plans)
+        recorder = _SequentialRecorder(emitter, task, budget.start, plans)
         queries: list[QueryResult] = []
         bound: BoundPlan | None = None
         tried = 0
-        for index, plan in enumerate(task.plans):
+        fluent_streams = frozenset(s.name for s in task.loaded.streams.streams if s.fluents)
+        records = InstanceRecords(doubt_after=task.doubt_after, fluent_streams=fluent_streams)
+        feed = None
+        if task.source is not None:
+            feed = SourceFeed(task, lambda _t, p: (tuple(p), [[] for _ in p]), emitter, budget)
+
+        def observe(
+            restart: int,
+            i: int,
+            inst: StreamInstance,
+            inputs: tuple[Any, ...],
+            context: StreamContext,
+            result: QueryResult,
+        ) -> None:
+            records.record(inst, result)
+            recorder.queried(restart, i, inst, inputs, context, result)
+
+        index = 0
+        while True:
             if time.perf_counter() > budget.deadline:
                 break
             if budget.should_stop is not None and budget.should_stop():
                 return PlannerOutcome("cancelled", None, None, None, queries, tried)
+            if index == len(plans):  # every skeleton tried: more, planned on what failed
+                feedback = records.feedback()
+                if feed is not None and not feed.exhausted_for(feedback):
+                    plans += [p for p, _ in feed.more("all tried", feedback)]
+                    continue
+                if not plans:
+                    break
+                index = 0  # nothing new: another round over the skeletons, with new samples
+            plan = plans[index]
             tried += 1
             recorder.open_plan(index)
             bound, made = bind_sequentially(
@@ -400,9 +567,10 @@ class SequentialPlanner(Planner):
                 task.samplers,
                 attempts=self.config.attempts,
                 restarts=self.config.restarts,
-                observe=recorder.queried,
+                observe=observe,
             )
             queries += made
+            index += 1
             if bound is not None:
                 break
         execution_s = oracle_s = None
@@ -410,7 +578,7 @@ class SequentialPlanner(Planner):
             execution_s = execution_seconds(
                 task.samplers, bound.skeleton.actions, bound.skeleton.stream_plan, bound.values
             )
-            oracle_s = recorder.solved(execution_s)
+            oracle_s = recorder.solved(execution_s, skeleton_seconds(task))
         status = "solved" if bound is not None else "timeout"
         return PlannerOutcome(status, bound, execution_s, oracle_s, queries, tried)
 
@@ -421,15 +589,16 @@ class _SequentialRecorder:
     restart starts again from the skeleton's node). So the dashboard shows the run and the
     store keeps every query as a training row."""
 
-    def __init__(self, emitter: Emitter, task: PlanningTask, start: float) -> None:
+    def __init__(
+        self, emitter: Emitter, task: PlanningTask, start: float, plans: Sequence[AbstractPlan]
+    ) -> None:
         self.emitter = emitter
-        self.plans: Sequence[AbstractPlan] = task.plans
+        self.plans = plans  # the run's list: it grows as more skeletons come
         self.fluents = task.fluents
         self.static_context = task.static_context
         self.encode = task.loaded.encode
         self.describe = task.loaded.codec.label
         self.start = start
-        self.topk_s = task.topk_s
         self.next_id = 1  # 0 is the root
         self.plan_index = -1
         self.plan_node = 0
@@ -502,9 +671,9 @@ class _SequentialRecorder:
             self.parent = node
             self.chain.append((node, result.wall_s))
 
-    def solved(self, execution_s: float) -> float:
+    def solved(self, execution_s: float, skeleton_s: float) -> float:
         """Reports the solution (the last success); returns its oracle seconds."""
-        oracle = self.topk_s + sum(wall for _, wall in self.chain)
+        oracle = skeleton_s + sum(wall for _, wall in self.chain)
         self.emitter.emit(
             SolutionFound,
             node_id=self.parent,
@@ -526,6 +695,7 @@ class PlannerSpec:
     name: str  # as given: "learned:dead_ends=off"
     kind: type[Planner]
     parts: LearnedConfig | None = None  # the learned planners' configuration
+    skeletons: str | None = None  # "skeletons=kstar": the run's skeleton source, any planner
 
     @property
     def uses_model(self) -> bool:
@@ -562,8 +732,22 @@ def get_planner(spec: str) -> PlannerSpec:
     if name not in _NAMED:
         raise ValueError(f"unknown planner {name!r} (known: {', '.join(PLANNERS)})")
     kind, make = _NAMED[name]
+    skeletons: str | None = None
+    rest = []
+    for item in (t for t in settings.split(":") if t):
+        key, _, value = item.partition("=")
+        if key != "skeletons":
+            rest.append(item)
+        elif value not in SKELETON_SOURCES:
+            known = ", ".join(SKELETON_SOURCES)
+            raise ValueError(f"planner setting {item!r}: unknown skeleton source (known: {known})")
+        else:
+            skeletons = value
     if make is None:
-        if settings:
-            raise ValueError(f"planner {name!r} has no parts to set (only paper and learned do)")
-        return PlannerSpec(spec, kind)
-    return PlannerSpec(spec, kind, make().with_settings(settings))
+        if rest:
+            raise ValueError(
+                f"planner {name!r} has no parts to set (only paper and learned do; every "
+                "planner takes skeletons=SOURCE)"
+            )
+        return PlannerSpec(spec, kind, skeletons=skeletons)
+    return PlannerSpec(spec, kind, make().with_settings(":".join(rest)), skeletons)

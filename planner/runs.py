@@ -14,11 +14,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from planner.api import RunConfig, RunResult, plan_summaries, solve
+from planner.api import RunConfig, RunResult, solve
 from planner.domains import LoadedDomain
 from planner.events import EventSink, FanOutSink
 from planner.pddl.structs import Problem
-from planner.planners import DEFAULT_PLANNER, ORDERS, PLANNERS
+from planner.planners import DEFAULT_PLANNER, ORDERS, PLANNERS, plan_summaries
 
 if TYPE_CHECKING:
     from planner.store import RunStore

@@ -20,7 +20,7 @@ def run(*args: str) -> subprocess.CompletedProcess[str]:
 
 @pytest.mark.slow
 def test_abstract_json_lists_valid_unique_plans() -> None:
-    proc = run("abstract", "--scene", "line-2", "--k", "5", "--json")
+    proc = run("abstract", "--scene", "line-2", "--k", "5", "--planner", "kstar", "--json")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["backend"] == "kstar" and out["k"] == 5 and len(out["plans"]) == 5
@@ -31,15 +31,20 @@ def test_abstract_json_lists_valid_unique_plans() -> None:
         "sample-pose",
         "test-reachable",
     )
-    assert set(out["seconds"]) == {"instantiate", "topk", "recover", "total"}
+    assert set(out["seconds"]) == {"instantiate", "ground", "topk", "recover", "total"}
+    # The default source: greedy searches, the cheapest first, as many as they find.
+    proc = run("abstract", "--scene", "line-2", "--k", "5", "--json")
+    adaptive = json.loads(proc.stdout)
+    assert adaptive["backend"] == "adaptive" and 1 <= len(adaptive["plans"]) <= 5
+    assert all(p["valid"] for p in adaptive["plans"])
+    assert adaptive["plans"][0]["cost"] == first["cost"]  # as cheap as K*'s cheapest
 
 
 @pytest.mark.slow
 def test_abstract_text_output_and_problem_file(capsys: pytest.CaptureFixture[str]) -> None:
     problem = Path(__file__).parent.parent / "planner/domains/line/problems/line-2.pddl"
-    code = main(
-        ["abstract", "--domain", "line", "--problem", str(problem), "--k", "2", "--show", "1"]
-    )
+    args = ["abstract", "--domain", "line", "--problem", str(problem), "--k", "2", "--show", "1"]
+    code = main([*args, "--planner", "kstar"])
     out = capsys.readouterr().out
     assert code == 0
     assert "2 of 2 skeletons from kstar" in out

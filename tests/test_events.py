@@ -205,10 +205,12 @@ def test_only_a_failure_has_a_reason() -> None:
     assert event_from_dict(data | {"reason": None}).reason is None  # type: ignore[attr-defined]
 
 
-def test_only_a_success_can_be_reused() -> None:
+def test_an_error_is_never_reused_but_a_tests_failure_is() -> None:
     data = event_to_dict(EXAMPLES["stream_queried"]) | {"success": False, "reused_from": 3}
-    with pytest.raises(ValueError, match="reused_from: only a success is reused"):
-        event_from_dict(data)
+    with pytest.raises(ValueError, match="reused_from: an error is never reused"):
+        event_from_dict(data | {"error": "ValueError: boom"})
+    answer = event_from_dict(data | {"error": None, "reason": "failed on these inputs before"})
+    assert answer.reused_from == 3  # type: ignore[attr-defined]
 
 
 def test_malformed_json_and_wrong_field_types_are_value_errors() -> None:

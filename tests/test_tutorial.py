@@ -71,7 +71,11 @@ def trained(work: Path) -> Path:
 
 def test_abstract_plans_and_the_baseline_from_a_copied_folder(work: Path) -> None:
     scene = "mydomain/scenes/tabletop-2.json"  # its "domain" is "..": the folder above
-    out = json.loads(tamp("abstract", "--scene", scene, "--k", "5", "--json", cwd=work).stdout)
+    out = json.loads(
+        tamp(
+            "abstract", "--scene", scene, "--k", "5", "--planner", "kstar", "--json", cwd=work
+        ).stdout
+    )
     assert out["domain"] == "tabletop2d" and len(out["plans"]) == 5
     assert all(p["valid"] for p in out["plans"])
     streams = {s["stream"] for p in out["plans"] for s in p["stream_plan"]}

@@ -8,7 +8,9 @@ Scene fields::
     "goal":    [["In", "A", "red"], ...]
 
 Each block starts at a position drawn with the seed: inside its region, where the arm reaches it,
-clear of the others. Every error names the scene file and the field.
+clear of the others; or, with ``"x": 4.5``, exactly there (PDDLStream's problem generators place
+blocks so: packed side by side, or one standing in the goal region). Every error names the scene
+file and the field.
 """
 
 from __future__ import annotations
@@ -36,8 +38,8 @@ def _number(scene: Scene, path: str, value: Any, *, positive: bool = True) -> fl
     return float(value)
 
 
-def world_from_scene(scene: Scene) -> tuple[World, dict[str, str]]:
-    """The scene's geometry, and each block's start region."""
+def world_from_scene(scene: Scene) -> tuple[World, dict[str, str], dict[str, float]]:
+    """The scene's geometry, each block's start region, and the fixed starts."""
     regions: dict[str, tuple[float, float]] = {}
     for name, box in scene.get("regions", dict).items():
         check_name(scene, f"regions.{name}", name)
@@ -51,6 +53,7 @@ def world_from_scene(scene: Scene) -> tuple[World, dict[str, str]]:
     arm = scene.get("arm", dict)
     blocks: dict[str, Block] = {}
     starts: dict[str, str] = {}
+    fixed: dict[str, float] = {}
     for i, raw in enumerate(scene.get("blocks", list)):
         where = f"blocks[{i}]"
         if not isinstance(raw, dict):
@@ -65,6 +68,8 @@ def world_from_scene(scene: Scene) -> tuple[World, dict[str, str]]:
             raise scene.field_error(f"{where}.region", f"unknown region {raw.get('region')!r}")
         blocks[name] = Block(name, width, height)
         starts[name] = str(raw["region"])
+        if "x" in raw:
+            fixed[name] = _number(scene, f"{where}.x", raw["x"], positive=False)
     if not blocks:
         raise scene.field_error("blocks", "expected at least one block")
     world = World(
@@ -74,7 +79,7 @@ def world_from_scene(scene: Scene) -> tuple[World, dict[str, str]]:
         _number(scene, "arm.reach", arm.get("reach")),
         _number(scene, "arm.speed", arm.get("speed")),
     )
-    return world, starts
+    return world, starts, fixed
 
 
 def reachable(world: World, block: Block, x: float) -> bool:
@@ -82,10 +87,29 @@ def reachable(world: World, block: Block, x: float) -> bool:
     return any(abs(x + f * block.width - world.base_x) <= world.reach for f in GRASP_FRACTIONS)
 
 
-def initial_poses(scene: Scene, world: World, starts: dict[str, str], seed: int) -> dict[str, Any]:
+def initial_poses(
+    scene: Scene, world: World, starts: dict[str, str], fixed: dict[str, float], seed: int
+) -> dict[str, Any]:
     rng = random.Random(seed)
     placed: dict[str, float] = {}
     for i, (name, block) in enumerate(world.blocks.items()):
+        if name not in fixed:
+            continue
+        lo, hi = world.regions[starts[name]]
+        x = fixed[name]
+        if not lo + block.width / 2 <= x <= hi - block.width / 2:
+            raise scene.field_error(
+                f"blocks[{i}].x", f"{x:g} does not hold the block inside region {starts[name]!r}"
+            )
+        if not reachable(world, block, x):
+            raise scene.field_error(f"blocks[{i}].x", f"{x:g} is out of the arm's reach")
+        for other, x2 in placed.items():
+            if abs(x - x2) < (block.width + world.blocks[other].width) / 2:
+                raise scene.field_error(f"blocks[{i}].x", f"{x:g} overlaps block {other!r}")
+        placed[name] = x
+    for i, (name, block) in enumerate(world.blocks.items()):
+        if name in fixed:
+            continue
         lo, hi = world.regions[starts[name]]
         for _ in range(PLACE_TRIES):
             x = rng.uniform(lo + block.width / 2, hi - block.width / 2)
@@ -101,13 +125,13 @@ def initial_poses(scene: Scene, world: World, starts: dict[str, str], seed: int)
                 f"no reachable start clear of the others in region {starts[name]!r} after "
                 f"{PLACE_TRIES} draws (seed {seed}): make the region larger",
             )
-    return {name: np.array([x, 0.0]) for name, x in placed.items()}
+    return {name: np.array([placed[name], 0.0]) for name in world.blocks}
 
 
 def pddlstream_problem(scene: Scene, seed: int) -> tuple[list[tuple[Any, ...]], Any, World]:
     """PDDLStream's ``init`` and ``goal`` for the scene, as its examples build them."""
-    world, starts = world_from_scene(scene)
-    poses = initial_poses(scene, world, starts, seed)
+    world, starts, fixed = world_from_scene(scene)
+    poses = initial_poses(scene, world, starts, fixed, seed)
     q0 = np.array([world.base_x, TRAVEL_Y])
     init: list[tuple[Any, ...]] = [("CanMove",), ("HandEmpty",), ("Conf", q0), ("AtConf", q0)]
     init += [("Region", r) for r in world.regions]

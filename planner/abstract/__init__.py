@@ -9,6 +9,7 @@ from planner.abstract.compile import (
 from planner.abstract.errors import (
     AbstractPlanningError,
     InstantiationLimitError,
+    PlannerTimeoutError,
     TopKPlannerError,
     UnreachableGoalError,
 )
@@ -35,6 +36,13 @@ from planner.abstract.skeleton import (
     replay,
     symbolic_states,
 )
+from planner.abstract.source import (
+    DEFAULT_SOURCE,
+    SKELETON_SOURCES,
+    Feedback,
+    SkeletonBatch,
+    SkeletonSource,
+)
 from planner.abstract.topk import (
     DEFAULT_TOPK,
     TOPK_PLANNERS,
@@ -47,14 +55,17 @@ from planner.abstract.topk import (
 
 __all__ = [
     "DEFAULT_COST_SCALE",
+    "DEFAULT_SOURCE",
     "DEFAULT_TOPK",
     "MAX_K",
     "OPTIMISTIC_PREFIX",
+    "SKELETON_SOURCES",
     "TOPK_PLANNERS",
     "AbstractConfig",
     "AbstractPlan",
     "AbstractPlanningError",
     "AbstractResult",
+    "Feedback",
     "FunctionEvaluator",
     "GroundAction",
     "InstantiationLimitError",
@@ -62,6 +73,9 @@ __all__ = [
     "OptimisticInstantiation",
     "PlanReplayError",
     "PlannerTask",
+    "PlannerTimeoutError",
+    "SkeletonBatch",
+    "SkeletonSource",
     "StreamInstance",
     "SymKPlanner",
     "TopKPlanner",

@@ -22,3 +22,7 @@ class TopKPlannerError(AbstractPlanningError):
 
 class InstantiationLimitError(AbstractPlanningError):
     """Optimistic instantiation exceeded its bound on stream instances."""
+
+
+class PlannerTimeoutError(TopKPlannerError):
+    """The planner (top-k, Fast Downward's search or translator) ran out of its time."""

@@ -126,7 +126,8 @@ def instantiate(
                 f"object name {obj.name!r} uses the reserved prefix {OPTIMISTIC_PREFIX!r}"
             )
     facts: dict[str, set[tuple[str, ...]]] = defaultdict(set)
-    for atom in problem.init:
+    init = problem.init
+    for atom in init:
         facts[atom.predicate].add(atom.args)
     instances: list[StreamInstance] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
@@ -168,8 +169,8 @@ def instantiate(
                 stream=stream.name,
                 inputs=inputs,
                 outputs=tuple(outputs),
-                domain=tuple(a.substitute(mapping) for a in stream.domain),
-                certified=tuple(a.substitute(mapping) for a in stream.certified),
+                domain=tuple([a.substitute(mapping) for a in stream.domain]),
+                certified=tuple([a.substitute(mapping) for a in stream.certified]),
                 level=level,
                 kind=stream.kind,
                 output_types=tuple(o.type for o in stream.outputs),
@@ -184,7 +185,7 @@ def instantiate(
             if instances[index].kind == "predicate":
                 continue  # assumed false: a lazy test certifies nothing
             for atom in instances[index].certified:
-                if atom not in problem.init and atom not in certifier:
+                if atom not in init and atom not in certifier:
                     certifier[atom] = index
                 facts[atom.predicate].add(atom.args)
     log.debug("instantiated %d stream instances over %d levels", len(instances), levels)

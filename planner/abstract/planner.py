@@ -1,31 +1,24 @@
-"""Abstract planning: k unique skeletons (action plan + stream plan) from a top-k planner.
+"""Abstract planning: k unique skeletons (action plan + stream plan) from a skeleton source.
 
 The road eTAMP takes, which scales: plan over the domain's actions only, with every optimistic
 stream fact in the initial state, then recover each plan's stream plan. Plans that differ only in
-which optimistic object is which are one skeleton; while fewer than k skeletons are unique the
-request grows by ``growth`` (eTAMP: 1.5x) until the planner has no more.
+which optimistic object is which are one skeleton. :func:`plan_abstract` asks a
+:class:`~planner.abstract.source.SkeletonSource` for k of them at once (``tamp abstract``); a run
+keeps its source and asks it for more as the search goes (:mod:`planner.planners`).
 """
 
 from __future__ import annotations
 
 import logging
-import math
-import time
 from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from planner.abstract.compile import DEFAULT_COST_SCALE, FunctionEvaluator, compile_planner_task
-from planner.abstract.instantiate import OptimisticInstantiation, instantiate
-from planner.abstract.skeleton import (
-    AbstractPlan,
-    GroundAction,
-    action_multiset,
-    canonical_key,
-    recover_stream_plan,
-)
-from planner.abstract.topk import DEFAULT_TOPK, TOPK_PLANNERS, get_topk_planner
-from planner.pddl.structs import Atom, Domain, Problem, StreamSet, problem_predicates
+from planner.abstract.instantiate import OptimisticInstantiation
+from planner.abstract.skeleton import AbstractPlan, GroundAction, action_multiset
+from planner.abstract.source import ADAPTIVE, DEFAULT_SOURCE, SKELETON_SOURCES, SkeletonSource
+from planner.pddl.structs import Domain, Problem, StreamSet
 
 log = logging.getLogger(__name__)
 
@@ -37,7 +30,9 @@ class AbstractConfig:
     """How many skeletons to find and how."""
 
     k: int = 50  # unique skeletons wanted (the paper uses k = 50 on the kitchen)
-    backend: str = DEFAULT_TOPK  # top-k planner by name: "kstar" or "symk"
+    # The skeleton source by name: "adaptive" (greedy searches, on demand, replanning on what
+    # the search proved), or a top-k planner: "kstar", "symk" (planner.abstract.source).
+    backend: str = DEFAULT_SOURCE
     max_levels: int = 4  # generations of optimistic stream instances
     max_instances: int = 50_000  # bound on optimistic stream instances
     growth: float = 1.5  # request growth per round while duplicates leave < k (eTAMP's 1.5)
@@ -48,13 +43,21 @@ class AbstractConfig:
     max_requested: int = 4 * MAX_K  # never ask the top-k planner for more plans than this
     # Non-integer costs reach the planners multiplied by this and rounded (they take integers).
     cost_scale: float = DEFAULT_COST_SCALE
+    workers: int = 2  # adaptive: greedy searches run side by side (one process each)
+    # adaptive, in a run: skeletons in the first batch; each later batch is batch_growth times
+    # the last (the search asks for more when the ones it has look worse than a new one).
+    first_batch: int = 10
+    batch_growth: float = 2.0
+    # adaptive: wall seconds Fast Downward's anytime search may spend making a task's first
+    # skeleton cheaper (0: the greedy plan as found); the skeletons after it cost no more.
+    improve_s: float = 0.5
 
     def __post_init__(self) -> None:
         if not 1 <= self.k <= MAX_K:
             raise ValueError(f"k must be between 1 and {MAX_K}, got {self.k}")
-        if self.backend not in TOPK_PLANNERS:
-            known = ", ".join(sorted(TOPK_PLANNERS))
-            raise ValueError(f"unknown top-k planner {self.backend!r} (known: {known})")
+        if self.backend not in SKELETON_SOURCES:
+            known = ", ".join(SKELETON_SOURCES)
+            raise ValueError(f"unknown skeleton source {self.backend!r} (known: {known})")
         if self.max_levels < 1 or self.max_instances < 1:
             raise ValueError("max_levels and max_instances must be positive")
         if self.growth <= 1.0:
@@ -65,6 +68,43 @@ class AbstractConfig:
             raise ValueError(f"timeout_s must be positive, got {self.timeout_s}")
         if self.cost_scale <= 0:
             raise ValueError(f"cost_scale must be positive, got {self.cost_scale}")
+        if self.workers < 1 or self.first_batch < 1:
+            raise ValueError("workers and first_batch must be positive")
+        if self.batch_growth < 1.0:
+            raise ValueError(f"batch_growth must be at least 1, got {self.batch_growth}")
+
+    @property
+    def adaptive(self) -> bool:
+        return self.backend == ADAPTIVE
+
+    def source(
+        self,
+        domain: Domain,
+        streams: StreamSet,
+        problem: Problem,
+        *,
+        functions: FunctionEvaluator | None = None,
+        progress: Callable[[str, str, float], None] | None = None,
+    ) -> SkeletonSource:
+        """The skeleton source this config describes, for one problem."""
+        ignore = self.diversity_ignore
+        return SkeletonSource(
+            domain,
+            streams,
+            problem,
+            backend=self.backend,
+            max_levels=self.max_levels,
+            max_instances=self.max_instances,
+            timeout_s=self.timeout_s,
+            cost_scale=self.cost_scale,
+            workers=self.workers,
+            improve_s=self.improve_s,
+            diversity=lambda plans, k: _select_diverse(plans, k, ignore),
+            topk_oversample=self.oversample,
+            topk_growth=self.growth,
+            functions=functions,
+            progress=progress,
+        )
 
 
 @dataclass(frozen=True)
@@ -73,15 +113,16 @@ class AbstractResult:
 
     plans: tuple[AbstractPlan, ...]
     backend: str
-    rounds: int  # top-k calls made
-    requested: int  # plans asked for in the last call
-    returned: int  # plans the last call returned
+    rounds: int  # planner calls made (top-k calls, or greedy searches)
+    requested: int  # skeletons asked for
+    returned: int  # skeletons returned
     unique: int  # unique skeletons among them
-    exhausted: bool  # the planner had no more plans
+    exhausted: bool  # the source had no more
     instances: int  # optimistic stream instances
-    seconds: dict[str, float] = field(default_factory=dict)  # instantiate, topk, recover, total
+    # instantiate, ground (direct or translator), topk (the planner's searches), recover, total
+    seconds: dict[str, float] = field(default_factory=dict)
     diversity_ignore: tuple[str, ...] = ()  # as in the config
-    stop_reason: str = "enough"  # enough | exhausted | limit | no-new-skeletons
+    stop_reason: str = "enough"  # enough | exhausted (the source found no more)
 
     @property
     def distinct_multisets(self) -> int:
@@ -136,96 +177,37 @@ def plan_abstract(
     progress: Callable[[str], None] | None = None,
     functions: FunctionEvaluator | None = None,
 ) -> AbstractResult:
-    """Find ``config.k`` unique skeletons (fewer if the planner runs out).
+    """Find ``config.k`` unique skeletons (fewer if the source runs out).
 
-    ``progress`` receives one line before each top-k call and after it (for a terminal).
+    ``progress`` receives a line whenever the source starts a phase (for a terminal).
     ``functions`` gives the stream file's numeric functions their values where every input
     is a real object, and their lower bounds elsewhere (without it every stream function is
     worth 0 to the planner: the default lower bound). Plan costs are in the domain's units.
     """
     say = progress or (lambda _msg: None)
-    t0 = time.perf_counter()
-    domain = domain.declaring(problem_predicates(domain, problem))  # the problem's own facts
-    inst = instantiate(
-        streams, problem, max_levels=config.max_levels, max_instances=config.max_instances
+    source = config.source(
+        domain, streams, problem, functions=functions, progress=lambda _p, m, _s: say(m)
     )
-    t_inst = time.perf_counter() - t0
-    task = compile_planner_task(
-        domain,
-        problem,
-        inst,
-        streams=streams,
-        functions=functions,
-        cost_scale=config.cost_scale,
-    )
-    domain_pddl, problem_pddl = task.domain_pddl, task.problem_pddl
-    backend = get_topk_planner(config.backend)
-    request = min(math.ceil(config.k * config.oversample), config.max_requested)
-    rounds, t_topk, t_recover = 0, 0.0, 0.0
-    previous_unique = 0
-    stale = 0
-    stop_reason = "enough"
-    while True:
-        rounds += 1
-        say(f"{config.backend}: asking for {request} plans (call {rounds})")
-        result = backend.plan(domain_pddl, problem_pddl, request, timeout_s=config.timeout_s)
-        t_topk += result.seconds
-        t1 = time.perf_counter()
-        unique: dict[object, AbstractPlan] = {}
-        cache: dict[GroundAction, tuple[Atom, ...]] = {}
-        for planned, cost in zip(result.plans, result.costs, strict=True):
-            originals = [task.original(a) for a in planned]
-            actions = tuple(a for a, _ in originals)
-            stream_plan, first_use = recover_stream_plan(
-                actions,
-                domain,
-                problem,
-                inst,
-                cache=cache,
-                streams=streams,
-                preconditions=[f for _, f in originals] if task.variants else None,
-            )
-            key = canonical_key(actions, stream_plan)
-            if key not in unique:
-                real = cost / task.cost_scale if task.cost_scale != 1.0 else cost
-                unique[key] = AbstractPlan(actions, stream_plan, real, first_use)
-        t_recover += time.perf_counter() - t1
-        message = (
-            f"{config.backend}: {len(result.plans)} plans in {result.seconds:.1f} s, "
-            f"{len(unique)} unique skeletons"
-        )
-        log.info(message)
-        say(message)
-        if len(unique) >= config.k:
-            stop_reason = "enough"
-            break
-        if result.exhausted or request >= config.max_requested:
-            stop_reason = "exhausted" if result.exhausted else "limit"
-            break
-        stale = stale + 1 if rounds > 1 and len(unique) <= previous_unique else 0
-        if stale >= 2:  # two larger requests in a row found nothing new
-            stop_reason = "no-new-skeletons"
-            log.info("no new skeletons in %d more plans; stopping at %d", request, len(unique))
-            break  # a domain with cycles has endless plans but no new stream plans
-        previous_unique = len(unique)
-        request = min(math.ceil(request * config.growth), config.max_requested)
-    chosen = _select_diverse(list(unique.values()), config.k, config.diversity_ignore)
-    total = time.perf_counter() - t0
+    batch = source.request(config.k)
+    steps = dict(batch.steps)
+    seconds = {
+        "instantiate": steps.pop("instantiate", 0.0),
+        "ground": steps.pop("ground", 0.0) + steps.pop("translate", 0.0),
+        "topk": steps.pop("topk", 0.0) + steps.pop("search", 0.0),
+        "recover": steps.pop("recover", 0.0),
+        "total": batch.seconds,
+    }
+    stop = "enough" if len(batch.plans) >= config.k else "exhausted"
     return AbstractResult(
-        plans=tuple(chosen),
+        plans=batch.plans,
         backend=config.backend,
-        rounds=rounds,
-        requested=request,
-        returned=len(result.plans),
-        unique=len(unique),
-        exhausted=result.exhausted,
-        instances=len(inst.instances),
-        seconds={
-            "instantiate": t_inst,
-            "topk": t_topk,
-            "recover": t_recover,
-            "total": total,
-        },
+        rounds=batch.searches,
+        requested=config.k,
+        returned=len(batch.plans),
+        unique=len(batch.plans),
+        exhausted=batch.exhausted,
+        instances=source.instances,
+        seconds=seconds,
         diversity_ignore=config.diversity_ignore,
-        stop_reason=stop_reason,
+        stop_reason=stop,
     )

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
-from planner.abstract.errors import TopKPlannerError, UnreachableGoalError
+from planner.abstract.errors import PlannerTimeoutError, TopKPlannerError, UnreachableGoalError
 from planner.abstract.skeleton import GroundAction
 
 log = logging.getLogger(__name__)
@@ -81,7 +81,9 @@ class TopKPlanner(ABC):
             out, err = proc.communicate(timeout=timeout_s)
         except subprocess.TimeoutExpired as exc:
             _kill_group(proc)
-            raise TopKPlannerError(f"timed out after {timeout_s:g} s", backend=self.name) from exc
+            raise PlannerTimeoutError(
+                f"timed out after {timeout_s:g} s", backend=self.name
+            ) from exc
         except BaseException:
             _kill_group(proc)
             raise

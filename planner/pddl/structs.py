@@ -54,7 +54,8 @@ class Atom:
 
     def substitute(self, mapping: Mapping[str, str]) -> Atom:
         """Replace every term found in ``mapping``; others stay."""
-        return Atom(self.predicate, tuple(mapping.get(a, a) for a in self.args))
+        get = mapping.get
+        return Atom(self.predicate, tuple([get(a, a) for a in self.args]))
 
     @property
     def variables(self) -> tuple[str, ...]:

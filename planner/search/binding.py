@@ -65,12 +65,13 @@ def stream_contexts(plan: AbstractPlan, domain: Domain, problem: Problem) -> lis
 
 def shared_states(
     states: Sequence[Sequence[frozenset[Atom]]],
+    seen: dict[frozenset[Atom], frozenset[Atom]] | None = None,
 ) -> list[list[frozenset[Atom]]]:
     """``states`` (one list per plan) with one object for each distinct state: the k plans of
     a problem pass through many of the same states, and what reads a state (query contexts,
     feature rows, the learned policy's keys) then finds it by identity instead of comparing
-    its facts one by one."""
-    seen: dict[frozenset[Atom], frozenset[Atom]] = {}
+    its facts one by one. ``seen`` keeps the objects across calls (plans that come later)."""
+    seen = {} if seen is None else seen
     return [[seen.setdefault(s, s) for s in plan_states] for plan_states in states]
 
 

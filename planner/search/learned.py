@@ -234,6 +234,17 @@ class LearnedConfig:
 
     Measured: see docs/BENCHMARKS.md, *Trusting estimates*."""
 
+    doubt_plans: bool = True
+    """A stream plan that relies on a stream instance the search doubts (the same instance of
+    the optimistic task, over every plan and node, asked often with no success, or proved
+    false: planner/search/mcts.py ``feedback``) is estimated as a dead end, and a fresh
+    skeleton is asked for when every open plan is (the new one plans around what failed,
+    planner/abstract/source.py). Off: a plan's estimate reads only its own nodes, which a
+    failing instance fed fresh samples leaves low (the search resamples a pose that leaves no
+    room, again and again).
+
+    Measured (off against on, paired, docs/BENCHMARKS.md): not measured yet."""
+
     @classmethod
     def paper(cls) -> LearnedConfig:
         """The paper's planner: every addition off (exhaustion, the streams' contract, stays)."""
@@ -329,6 +340,8 @@ class LearnedPolicy:
     _fluent_sets: dict[frozenset[Atom], frozenset[Atom]] = field(default_factory=dict)
     _informed_at: dict[tuple[int, int], bool] = field(default_factory=dict)
     _trusting: tuple[int, bool] | None = None  # (plans seen, whether any stream is trusted)
+    _doubted: frozenset[tuple[str, tuple[str, ...]]] = frozenset()  # instances the search doubts
+    _doubted_plans: dict[int, bool] = field(default_factory=dict)  # per plan: relies on one
 
     def __post_init__(self) -> None:
         c = self.config
@@ -378,13 +391,14 @@ class LearnedPolicy:
         parent = tree[node.parent]
         if parent.plan_index != node.plan_index or node.depth != parent.depth + 1:
             return None
-        if not self._readers:
-            for p, st in zip(self.skeletons, self.states, strict=True):
-                readers: dict[str, list[int]] = {}
-                for i, names in enumerate(row_names(p, st, self.fluents)):
-                    for name in names:
-                        readers.setdefault(name, []).append(i)
-                self._readers.append(readers)
+        while len(self._readers) < len(self.skeletons):  # plans may come during the search
+            index = len(self._readers)
+            readers: dict[str, list[int]] = {}
+            plan_names = row_names(self.skeletons[index], self.states[index], self.fluents)
+            for i, names in enumerate(plan_names):
+                for name in names:
+                    readers.setdefault(name, []).append(i)
+            self._readers.append(readers)
         readers = self._readers[node.plan_index]
         outputs = list(node.outputs)
         if len(outputs) == 1:
@@ -534,9 +548,27 @@ class LearnedPolicy:
         return set(found)
 
     def _estimate(self, tree: Tree, node: Node) -> float:
-        """The node's estimate as of the last refresh (its Q before the first)."""
+        """The node's estimate as of the last refresh (its Q before the first); a plan's node
+        priced as a dead end while its plan relies on a doubted instance (``doubt_plans``)."""
         found = self._est.get(node.id)
-        return found if found is not None else self.q(tree, node)
+        value = found if found is not None else self.q(tree, node)
+        if node.parent == ROOT and self._doubted and self._relies_on_doubt(node.plan_index):
+            return dead_end_cost(value)
+        return value
+
+    def _relies_on_doubt(self, plan_index: int) -> bool:
+        found = self._doubted_plans.get(plan_index)
+        if found is None:
+            stream_plan = self.skeletons[plan_index].stream_plan
+            found = any((s.stream, s.inputs) in self._doubted for s in stream_plan)
+            self._doubted_plans[plan_index] = found
+        return found
+
+    def doubts(self, instances: frozenset[tuple[str, tuple[str, ...]]]) -> None:
+        """The search doubts these stream instances now (read only with ``doubt_plans``)."""
+        if self.config.doubt_plans:
+            self._doubted = instances
+            self._doubted_plans.clear()
 
     def _value(self, q: float) -> float:
         return self._scale / (self._scale + q) if self._scale > 0 else 1.0 / (1.0 + q)
@@ -601,6 +633,40 @@ class LearnedPolicy:
             plans,
             key=lambda n: self._value(self._estimate(tree, n)) + self._bonus(n.visits, root.visits),
         )
+
+    def ask_more(self, tree: Tree, plans_open: int, asked: int, ask_s: float) -> bool:
+        """Ask the skeleton source for another stream plan when a fresh one is estimated better
+        than every open plan: a fresh plan at the lowest Q any plan had when it was opened
+        (before anything was bound), plus the seconds a request takes; the open plans at their
+        estimates (progress lowers one, dead ends raise it). Without ``plans_by_estimate``
+        each side gets UCT's bonus too, the fresh plan's by the requests made. Trusting no
+        stream (``trust``), the baseline's widening rule at the root."""
+        self._refresh(tree)
+        if not self.trusting:
+            return tree[ROOT].visits > self.baseline.root_widen_k * plans_open**2
+        plans = tree.live_children(ROOT)
+        if not plans:
+            return True
+        fresh = min(self.q(tree, tree[c]) for c in tree[ROOT].children) + ask_s
+        if self._scale <= 0:
+            self._scale = max(min(self.q(tree, p) for p in plans), 1e-3)
+        root = tree[ROOT]
+        bonus = not self.config.plans_by_estimate
+        best = max(
+            self._value(self._estimate(tree, p)) + (self._bonus(p.visits, root.visits) * bonus)
+            for p in plans
+        )
+        new = self._value(fresh) + self._bonus(asked, root.visits) * bonus
+        return new > best
+
+    def plans_added(
+        self,
+        skeletons: Sequence[AbstractPlan],
+        states: Sequence[Sequence[frozenset[Atom]]],
+    ) -> None:
+        """Read the search's stream plans anew (a request brought more)."""
+        self.skeletons = skeletons
+        self.states = states
 
     def expand(self, tree: Tree, node: Node) -> bool:
         live = tree.live_children(node.id)

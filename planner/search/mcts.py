@@ -14,7 +14,9 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
+from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
+from planner.abstract.source import Feedback
 from planner.events import Emitter, NodeAdded, NodeVisited, SolutionFound, StreamQueried
 from planner.pddl.structs import Atom
 from planner.search.baseline import (
@@ -24,6 +26,7 @@ from planner.search.baseline import (
     success_value,
     ucb,
 )
+from planner.search.feedback import InstanceKey, InstanceRecords
 from planner.search.queries import query_context, query_identity, remembered
 from planner.search.reuse import reusable_streams
 from planner.search.tree import ROOT, Node, Tree
@@ -66,6 +69,51 @@ class Policy(Protocol):
         """The nodes one iteration made (its expansion and rollout), after its backup."""
         ...
 
+    def ask_more(self, tree: Tree, plans_open: int, asked: int, ask_s: float) -> bool:
+        """At the root, every known stream plan open: ask the skeleton source for more (True)
+        or descend into an open one. ``asked``: requests so far; ``ask_s``: the seconds a
+        request has taken on average."""
+        ...
+
+    def plans_added(
+        self,
+        skeletons: Sequence[AbstractPlan],
+        states: Sequence[Sequence[frozenset[Atom]]],
+    ) -> None:
+        """The search's stream plans (and their states) after a request brought more."""
+        ...
+
+    def doubts(self, instances: frozenset[InstanceKey]) -> None:
+        """The stream instances the search now doubts (asked ``doubt_after`` times or proved
+        false, never successful), by stream and inputs, after each change."""
+        ...
+
+
+class SkeletonFeed(Protocol):
+    """Where a search gets more stream plans: a skeleton source and what prepares its plans for
+    the search (their states, a model's stream order), reporting them as events."""
+
+    def more(
+        self, reason: str, feedback: Feedback
+    ) -> list[tuple[AbstractPlan, list[frozenset[Atom]]]]:
+        """New stream plans with their states, planned on what ``feedback`` says (empty: the
+        source has nothing new for it)."""
+        ...
+
+    def exhausted_for(self, feedback: Feedback) -> bool:
+        """Whether a request with this feedback is known to bring nothing new."""
+        ...
+
+    @property
+    def requests(self) -> int:
+        """Requests made so far, the first batch's included."""
+        ...
+
+    @property
+    def seconds(self) -> float:
+        """Wall seconds the source has worked, the first batch's included."""
+        ...
+
 
 @dataclass(frozen=True)
 class BaselinePolicy:
@@ -106,6 +154,20 @@ class BaselinePolicy:
         return failure_value(leaf.depth - 1, depth, self.config)
 
     def observe(self, tree: Tree, nodes: Sequence[Node]) -> None:
+        return None
+
+    def ask_more(self, tree: Tree, plans_open: int, asked: int, ask_s: float) -> bool:
+        """eTAMP's widening rule at the root, the same that opens a known plan."""
+        return tree[ROOT].visits > self.config.root_widen_k * plans_open**2
+
+    def plans_added(
+        self,
+        skeletons: Sequence[AbstractPlan],
+        states: Sequence[Sequence[frozenset[Atom]]],
+    ) -> None:
+        return None
+
+    def doubts(self, instances: frozenset[InstanceKey]) -> None:
         return None
 
 
@@ -184,6 +246,10 @@ class TreeSearch:
         static_context: Mapping[str, Any] | None = None,
         reuse: bool = False,
         exhaustion: bool = True,
+        feed: SkeletonFeed | None = None,
+        fluent_streams: frozenset[str] = frozenset(),
+        memo_tests: bool = True,
+        doubt_after: int = 8,
     ) -> None:
         if not skeletons:
             raise ValueError("the search needs at least one stream plan")
@@ -209,6 +275,22 @@ class TreeSearch:
         # a PDDLStream function that gave its one output) is not queried again; a node left
         # with nothing live below it is dead, and so is a plan whose nodes all are.
         self.exhaustion = exhaustion
+        # More stream plans on demand: the root's "ask for another skeleton" (Policy.ask_more),
+        # and what the search proved (self.feedback()) goes with every request.
+        self.feed = feed
+        # A test's answer is a function of its inputs (and, for a stream that reads fluents,
+        # of its context): with memo_tests a test asked again with the same ones gets its
+        # first answer back without a query (a failure as well as a success).
+        self.memo_tests = memo_tests
+        self.fluent_streams = fluent_streams  # streams whose samplers read the state
+        # identity -> (success, the node of the first answer, whether the stream said exhausted)
+        self._tests: dict[str, tuple[bool, int, bool]] = {}
+        # Feedback: per stream instance of the optimistic task, its queries and successes; an
+        # instance asked doubt_after times with no success is doubted (0: never).
+        self.records = InstanceRecords(
+            doubt_after=doubt_after, fluent_streams=fluent_streams, on_doubts=policy.doubts
+        )
+        self.asked = 0  # requests for more skeletons this search made
         self._reusable = [self._leaves(i) for i in range(len(self.skeletons))] if reuse else []
         # identity -> (node, outputs, wall seconds) of its first success, whether it was the
         # stream's last for those inputs and its outputs' execution seconds
@@ -283,7 +365,20 @@ class TreeSearch:
         earlier = self._results.get(identity) if identity and not node.children else None
         reused_from: int | None = None
         wall_s = 0.0  # what the node's binding cost, for the oracle: the original's seconds
-        if earlier is not None:
+        test_key = self._test_key(inst, inputs, context)
+        answered = self._tests.get(test_key) if test_key is not None else None
+        if answered is not None:
+            success, reused_from, exhausted = answered
+            result = QueryResult(
+                inst.stream,
+                () if success else None,
+                0.0,
+                0.0,
+                reused=True,
+                exhausted=exhausted,  # as the stream said the first time
+                reason=None if success else "the same test failed on these inputs before",
+            )
+        elif earlier is not None:
             reused_from, outputs_, wall_s, last, moves = earlier
             result = QueryResult(
                 inst.stream, outputs_, 0.0, 0.0, reused=True, exhausted=last, duration_s=moves
@@ -310,6 +405,10 @@ class TreeSearch:
         self.queries.append((child.id, result))
         if result.exhausted and self.exhaustion:
             node.exhausted = True
+        if test_key is not None and answered is None and result.error is None:
+            self._tests[test_key] = (result.success, child.id, result.exhausted)
+        if not result.reused:  # an answer given again is no new evidence
+            self.records.record(inst, result)
         if identity is not None and result.outputs is not None and reused_from is None:
             self._results.setdefault(
                 identity,
@@ -344,8 +443,53 @@ class TreeSearch:
         self._added(child)
         return child
 
+    def _test_key(
+        self, inst: StreamInstance, inputs: tuple[Any, ...], context: StreamContext
+    ) -> str | None:
+        """The memo key of a test query (None: not a memoized test): its stream and encoded
+        inputs, and its context when the stream reads fluents."""
+        if not self.memo_tests or inst.outputs or inst.kind != "stream":
+            return None
+        if inst.stream in self.fluent_streams:
+            return self._identity(inst.stream, inputs, context)
+        return query_identity(inst.stream, [self.encode(v) for v in inputs], {})
+
+    def feedback(self) -> Feedback:
+        """What the queries so far proved about the optimistic task
+        (:meth:`planner.search.feedback.InstanceRecords.feedback`)."""
+        return self.records.feedback()
+
+    def add_skeletons(
+        self, plans: Sequence[tuple[AbstractPlan, Sequence[frozenset[Atom]]]]
+    ) -> None:
+        """More stream plans for the root to open (from the feed, or by hand in tests)."""
+        for plan, states in plans:
+            self.skeletons.append(plan)
+            self.states.append(list(states))
+            if self.reuse:
+                self._reusable.append(self._leaves(len(self.skeletons) - 1))
+        self.policy.plans_added(self.skeletons, self.states)
+
+    def _ask(self, reason: str) -> int:
+        """Ask the feed for more stream plans; how many came."""
+        assert self.feed is not None
+        self.asked += 1
+        found = self.feed.more(reason, self.feedback())
+        self.add_skeletons(found)
+        return len(found)
+
+    def _can_ask(self) -> bool:
+        return self.feed is not None and not self.feed.exhausted_for(self.feedback())
+
     def _context_json(self, context: StreamContext) -> dict[str, Any]:
         return context_json(context, self.fluents, self.static_context, self.encode)
+
+    def _wants_more(self, tree: Tree) -> bool:
+        assert self.feed is not None
+        requests = max(self.feed.requests, 1)
+        return self.policy.ask_more(
+            tree, self._plans_open, self.asked, self.feed.seconds / requests
+        )
 
     def _bury(self, node: Node) -> None:
         """``node`` is exhausted and nothing live is below it: it is dead, and so is each
@@ -418,12 +562,17 @@ class TreeSearch:
             iterations += 1
             tree = self.tree
             closed = self._plans_open < len(self.skeletons)
-            if self.policy.add_plan(tree, self._plans_open, len(self.skeletons)) or (
-                closed and not tree.live_children(ROOT)
+            live = tree.live_children(ROOT)
+            if closed and (
+                self.policy.add_plan(tree, self._plans_open, len(self.skeletons)) or not live
             ):
                 node = self.open_plan(self._plans_open)
-            elif not tree.live_children(ROOT):
-                status = "failed"  # every stream plan is exhausted
+            elif not closed and self._can_ask() and (not live or self._wants_more(tree)):
+                if self._ask("more" if live else "all dead") == 0 and not live:
+                    continue  # nothing new: the next iteration finds the source exhausted
+                continue  # the next iteration opens what came (or goes on with the open ones)
+            elif not live:
+                status = "failed"  # every stream plan is exhausted, and nothing more comes
                 break
             else:
                 node = self.policy.pick_plan(tree)

@@ -12,7 +12,8 @@ pytestmark = pytest.mark.slow
 
 def test_kitchen_4_gives_50_unique_valid_skeletons() -> None:
     loaded, problem = problem_for_scene("kitchen-4")
-    result = plan_abstract(loaded.domain, loaded.streams, problem, AbstractConfig(k=50))
+    config = AbstractConfig(k=50, backend="kstar")
+    result = plan_abstract(loaded.domain, loaded.streams, problem, config)
     assert len(result.plans) == 50
     assert len({canonical_key(p.actions, p.stream_plan) for p in result.plans}) == 50
     for plan in result.plans:

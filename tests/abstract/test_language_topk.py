@@ -23,7 +23,7 @@ from planner.pddl import Atom, FunctionTerm, Literal
 from tests.pddl.domains import CASES, abstract, load
 
 pytestmark = pytest.mark.slow
-BACKENDS = ("kstar", "symk")
+BACKENDS = ("adaptive", "kstar", "symk")
 
 
 @cache

@@ -46,6 +46,7 @@ def stuck_search(folder: Path, config: LearnedConfig) -> tuple[TreeSearch, Learn
         encode=loaded.encode,
         fluents=loaded.fluents,
         reuse=True,
+        memo_tests=False,  # the collision test asked again and again: failures to learn from
     )
     return search, policy
 
