@@ -44,6 +44,11 @@ class NodeQueries(Protocol):
 
     def relevant(self, node: Node) -> set[str]: ...
 
+    def precise(self, node: Node) -> bool:
+        """Whether ``relevant`` is what the next query reads (not the whole state, which a
+        sampler given the context may read)."""
+        ...
+
 
 @dataclass
 class Evidence:
@@ -109,16 +114,16 @@ class Evidence:
 
     def _evaluate(self, tree: Tree, node: Node) -> None:
         """Whether the node's own failures make it a dead end, and why. An exhausted node
-        with nothing live below is one at once (with ``exhausted_dead``): its stream will give
-        nothing more, so its reason is what its failed queries (if any) and the dead ends below
-        it depend on."""
+        with nothing live below is one at once (with ``exhausted_dead``, where what its query
+        reads is known): its stream will give nothing more, so its reason is what its failed
+        queries (if any) and the dead ends below it depend on."""
         reason: frozenset[str] | None = None
         first = self.queries.first(node) if node.success and node.depth > 0 else None
         if first is not None and node.children and not self._live[node.id]:
             below = frozenset(self._below.get(node.id) or ())
             if self._unexplained(tree, node, first):
                 reason = frozenset(self.queries.relevant(node)) | below
-            elif self.exhausted_dead and node.exhausted:
+            elif self.exhausted_dead and node.exhausted and self.queries.precise(node):
                 failed = any(not tree[c].success for c in node.children)
                 reason = below | (frozenset(self.queries.relevant(node)) if failed else frozenset())
         self._set_source(tree, node.id, node, reason)

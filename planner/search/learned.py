@@ -224,7 +224,9 @@ class LearnedConfig:
     exhausted_dead: bool = True
     """With ``dead_ends``: a node whose stream said it has nothing more for its inputs (an
     exhausted PDDLStream function, test or list) and that has nothing live below it is a dead
-    end at once, its reason what its failed queries and the dead ends below it depend on; and
+    end at once, its reason what its failed queries and the dead ends below it depend on, where
+    that is known (the stream's sampler reads its inputs and declared fluents, not the whole
+    state: a guessed reason backjumps too far); and
     the node above counts each such child as a failure as likely as the predictions of the
     queries down to where it died say (a placement predicted sure whose collision tests are
     doubtful may die many times before the placement it collides with is to blame). So a
@@ -298,6 +300,9 @@ class _Queries:
 
     def relevant(self, node: Node) -> set[str]:
         return self.policy._relevant(node)
+
+    def precise(self, node: Node) -> bool:
+        return self.policy._precise(node)
 
 
 @dataclass
@@ -546,6 +551,12 @@ class LearnedPolicy:
                     out.update(a.args)
             found = self._relevant_at[where] = frozenset(out)
         return set(found)
+
+    def _precise(self, node: Node) -> bool:
+        """Whether what ``node``'s next query depends on is known (its sampler reads its
+        inputs and declared fluents only, ``reads``), not the whole state it is given."""
+        inst = self.skeletons[node.plan_index].stream_plan[node.depth]
+        return inst.stream in self.reads
 
     def _estimate(self, tree: Tree, node: Node) -> float:
         """The node's estimate as of the last refresh (its Q before the first); a plan's node

@@ -75,6 +75,9 @@ class _Told:
     def relevant(self, node: Node) -> set[str]:
         return set(self.reads.get(node.id, ()))
 
+    def precise(self, node: Node) -> bool:
+        return True
+
 
 def placement_that_left_no_room(tries: int) -> tuple[Tree, int, dict[int, set[str]]]:
     """Block 1 placed at opt-p1 (node ``first``); under it, ``tries`` placements of block 2,
