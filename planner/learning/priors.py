@@ -14,13 +14,16 @@ from collections import defaultdict
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from planner.search.learned import StreamCost
-from planner.streams.adapters import restates_contract
+
+if TYPE_CHECKING:
+    from planner.store import OutcomeSums
+from planner.streams.adapters import RESTATING, restates_contract
 
 log = logging.getLogger(__name__)
 
@@ -154,8 +157,27 @@ def priors_from_store(path: Path, domain: str) -> tuple[dict[str, Prior], int]:
                 log.warning("scene %s: cannot load it to tell its domain (%s)", scene, exc)
                 domains[(scene, ref)] = None
         mine = sorted(run for run, key in runs.items() if domains[key] == domain)
-        outcomes = store.query_outcomes(mine)
-    return priors_from_records(outcomes), len(outcomes)
+        sums = store.outcome_sums(mine, leave_out=RESTATING)
+    return priors_from_sums(sums), sum(s.n for s in sums)
+
+
+def priors_from_sums(sums: Iterable[OutcomeSums]) -> dict[str, Prior]:
+    """Each stream's prior from its queries summed by outcome (what
+    :func:`priors_from_records` computes one query at a time)."""
+    by_stream: dict[str, dict[bool, OutcomeSums]] = defaultdict(dict)
+    for s in sums:
+        by_stream[s.stream][s.success] = s
+    out = {}
+    for stream, parts in sorted(by_stream.items()):
+        ok, failed = parts.get(True), parts.get(False)
+        n_ok = ok.n if ok else 0
+        n = n_ok + (failed.n if failed else 0)
+        overall = ((ok.wall_s if ok else 0.0) + (failed.wall_s if failed else 0.0)) / max(n, 1)
+        r_s = ok.wall_s / ok.n if ok and ok.n else overall
+        r_f = failed.wall_s / failed.n if failed and failed.n else overall
+        r_m = ok.execution_s / ok.moved if ok and ok.moved else 0.0
+        out[stream] = Prior((n_ok + 1) / (n + 2), r_s, r_f, r_m, n)
+    return out
 
 
 class PriorPredictor:
