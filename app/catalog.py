@@ -109,7 +109,6 @@ class Domains:
                 log.warning("scene %s is not offered: %s", ref.path, exc)
                 continue
             blocks = scene.data.get("blocks", [])
-            folder = loaded.source.startswith("folder ")
             out.append(
                 SceneInfo(
                     name=ref.name,
@@ -117,7 +116,7 @@ class Domains:
                     description=str(scene.data.get("description", "")),
                     blocks=len(blocks) if isinstance(blocks, list | dict) else 0,
                     path=str(ref.path),
-                    domain_ref=str(loaded.directory) if folder else None,
+                    domain_ref=loaded.reference,
                     view=loaded.spec.view is not None,
                 )
             )

@@ -57,7 +57,7 @@ from planner.planners import (
     plan_summaries,
     skeleton_seconds,
 )
-from planner.plans import plan_to_dict, validate
+from planner.plans import execution_note, plan_to_dict, validate
 from planner.search.binding import BoundPlan
 from planner.streams.runtime import QueryResult, StreamRuntime
 
@@ -86,7 +86,7 @@ class RunConfig:
     budget_s: float = 300.0  # wall-clock budget of the run, top-k included
     attempts: int = 10  # sequential only: queries of one stream before a restart
     restarts: int = 3  # sequential only: restarts of one skeleton before the next
-    model: str | None = None  # model file (default: the domain's own; none: priors)
+    model: str | None = None  # model file (default: the domain's own; none: priors; "priors")
     c_explore: float | None = None  # learned only: UCT exploration weight (default: LearnedConfig)
     # Stream order of the tree searches: "plan" as the actions need them, "model" cheap
     # doubtful tests first by the model (planner/search/order.py), "auto" model for learned.
@@ -212,21 +212,23 @@ class PlanResult:
             streams=bound.skeleton.stream_plan,
             runtime=self.runtime,
         )
-        return report.ok, report.message
+        note = ""
+        if report.ok and self.loaded.spec.validate is not None:  # the replay adds its own
+            note = execution_note(self.loaded, self.execution_s)
+        return report.ok, report.message + note
 
     def plan_file(self) -> dict[str, Any] | None:
         """The bound plan as a plan file's dict (:mod:`planner.plans`); None when not solved."""
         bound = self.result.bound
         if bound is None:
             return None
-        folder = self.loaded.source.startswith("folder ")
         return plan_to_dict(
             loaded=self.loaded,
             scene=self.result.config.scene,
             seed=self.result.config.seed,
             plan=bound.skeleton,
             values=bound.values,
-            domain_path=str(self.loaded.directory) if folder else None,
+            domain_path=self.loaded.reference,
         )
 
 
@@ -269,8 +271,8 @@ def plan(
     else:
         scene_ref = str(scene)
     domain_ref = None
-    if loaded is not None and loaded.source.startswith("folder "):
-        domain_ref = str(loaded.directory)
+    if loaded is not None and loaded.reference is not None:
+        domain_ref = loaded.reference
     elif isinstance(domain, str):
         domain_ref = domain
     config = RunConfig(

@@ -27,7 +27,7 @@ from planner.experiment import (
     check_store_reachable,
     run_trials,
 )
-from planner.planners import get_planner
+from planner.planners import PRIORS, get_planner
 from planner.runs import ORDERS, PLANNERS, RunConfig
 from planner.store import BenchTrialRecord, RunStore
 
@@ -152,6 +152,8 @@ def check(config: BenchConfig) -> dict[str, Any]:
     info: dict[str, Any] = {"model": None, "training_seeds": None}
     if not any(config.uses_model(p) for p in config.planners):
         return info
+    if config.model == PRIORS:
+        return {"model": PRIORS, "training_seeds": None}
     if config.model is None:
         log.warning(
             "no model for domain %r: the learned planner runs on per-stream priors from the "
@@ -211,8 +213,8 @@ def locate_model(config: BenchConfig, sha256: str | None) -> BenchConfig:
     unchanged, else the domain's shipped model if that is the same file (a benchmark started
     from another checkout); a model that changed or is gone is refused, so one benchmark never
     mixes two."""
-    if config.model is None or sha256 is None:
-        return config  # not learned, or recorded before models were hashed
+    if config.model in (None, PRIORS) or sha256 is None:
+        return config  # not learned, priors, or recorded before models were hashed
     recorded = Path(config.model)
     if recorded.is_file() and _sha256(recorded) == sha256:
         return config

@@ -37,7 +37,7 @@ from planner.domains import (
 )
 from planner.pddl import PDDLError, Problem, StreamSet
 from planner.pddl.check import check_files
-from planner.planners import DEFAULT_PLANNER, PLANNERS, get_planner
+from planner.planners import DEFAULT_PLANNER, PLANNERS, PRIORS, get_planner
 from planner.plans import PlanFileError
 from planner.scene import SceneError
 from planner.streams import StreamBindingError
@@ -178,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument(
         "--model",
         help="model file for --planner learned (default: the domain's own; without one, "
-        "per-stream priors from the queries in --db)",
+        f"per-stream priors from the queries in --db; '{PRIORS}': those priors, always)",
     )
     pl.add_argument("--c-explore", type=float, help="learned: UCT exploration weight")
     pl.add_argument(
@@ -222,7 +222,9 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
     be.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
     be.add_argument(
-        "--model", help="model file for the learned planner (default: the domain's own)"
+        "--model",
+        help="model file for the learned planner (default: the domain's own; "
+        f"'{PRIORS}': per-stream priors from the benchmark's store, as with no model)",
     )
     be.add_argument(
         "--order",
@@ -349,9 +351,7 @@ def build_parser() -> argparse.ArgumentParser:
 def _domain_ref(loaded: LoadedDomain, given: str | None) -> str | None:
     """What a run records of its domain: the folder of one loaded from a path (so any process
     finds it again), the name given, or None (the scene file says)."""
-    if loaded.source.startswith("folder "):
-        return str(loaded.directory)
-    return given
+    return loaded.reference if loaded.reference is not None else given
 
 
 def _plan_json(
@@ -504,7 +504,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
         c_explore=args.c_explore,
         order=args.order,
         domain=_domain_ref(loaded, args.domain),
-        priors_db=str(db) if args.model is None and loaded.spec.model is None else None,
+        priors_db=str(db)
+        if args.model == PRIORS or (args.model is None and loaded.spec.model is None)
+        else None,
         skeletons=args.skeletons,
     )
     preload_libraries(config)

@@ -89,6 +89,7 @@ def check_store_reachable(db: str | Path, ray_address: str | None) -> None:
 def run_trial(trial: Trial, db: str, run_id: str | None = None) -> TrialResult:
     """One recorded run (in the calling process), stored under ``run_id`` (default: a new id);
     a planner that raises makes a failed result."""
+    from planner.planners import PRIORS
     from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
 
@@ -102,7 +103,7 @@ def run_trial(trial: Trial, db: str, run_id: str | None = None) -> TrialResult:
         order=trial.order,
         domain=trial.domain,
         # A learned trial with no model for its domain runs on the priors of this store.
-        priors_db=db if trial.model is None else None,
+        priors_db=db if trial.model in (None, PRIORS) else None,
     )
     preload_libraries(config)
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config), run_id=run_id)

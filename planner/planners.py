@@ -43,6 +43,7 @@ from planner.events import (
     StreamQueried,
 )
 from planner.pddl.structs import Atom, Problem
+from planner.plans import execution_seconds
 from planner.search.baseline import BaselineConfig
 from planner.search.binding import (
     BoundPlan,
@@ -52,7 +53,14 @@ from planner.search.binding import (
     stream_contexts,
 )
 from planner.search.feedback import InstanceRecords
-from planner.search.learned import LearnedConfig, LearnedPolicy, Predictor, StreamCost, stream_rows
+from planner.search.learned import (
+    LearnedConfig,
+    LearnedPolicy,
+    Predictor,
+    StreamCost,
+    stream_rows,
+    trusted_streams,
+)
 from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
 from planner.search.queries import remembered
@@ -63,6 +71,8 @@ from planner.streams.runtime import QueryResult, StreamRuntime
 log = logging.getLogger(__name__)
 
 ORDERS = ("auto", "plan", "model")  # how a tree search orders each stream plan's streams
+# A run's model named so runs on per-stream priors, as if its domain shipped no model.
+PRIORS = "priors"
 
 
 class PlannerConfig(Protocol):
@@ -75,7 +85,7 @@ class PlannerConfig(Protocol):
 
     @property
     def model(self) -> str | None:
-        """The model file; None: the domain's own, else priors."""
+        """The model file; None: the domain's own, else priors; :data:`PRIORS`: priors."""
         ...
 
     @property
@@ -183,28 +193,28 @@ class Planner(ABC):
 def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
     """The cost model of a run: ``config.model``, else the domain's shipped model, else per-stream
     priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning."""
-    path = config.model or loaded.spec.model
-    if path is not None:
+    path = loaded.spec.model if config.model is None else config.model
+    if path is not None and path != PRIORS:
         from planner.learning.predictor import ModelPredictor
 
         return ModelPredictor.load(Path(path), domain=loaded)
-    from planner.learning.priors import PriorPredictor, priors_from_records
+    from planner.learning.priors import Prior, PriorPredictor, priors_from_store
 
-    priors = {}
+    priors: dict[str, Prior] = {}
     source = "no recorded queries: uniform priors"
     if config.priors_db is not None and Path(config.priors_db).is_file():
-        from planner.learning.train import load_records
-
-        records = load_records([Path(config.priors_db)], domain=loaded.name)
-        priors = priors_from_records(records)
-        if records:
-            source = f"priors from {len(records)} queries recorded in {config.priors_db}"
-    log.warning(
-        "no model for domain %r: the learned search runs on per-stream priors (%s); "
-        "tamp train makes a model from recorded runs",
-        loaded.name,
-        source,
-    )
+        priors, queries = priors_from_store(Path(config.priors_db), loaded.name)
+        if queries:
+            source = f"priors from {queries} queries recorded in {config.priors_db}"
+    if config.model == PRIORS:
+        log.info("model %r: the learned search runs on per-stream priors (%s)", PRIORS, source)
+    else:
+        log.warning(
+            "no model for domain %r: the learned search runs on per-stream priors (%s); "
+            "tamp train makes a model from recorded runs",
+            loaded.name,
+            source,
+        )
     return PriorPredictor(priors)
 
 
@@ -402,6 +412,8 @@ class LearnedPlanner(_TreeSearchPlanner):
             on_prediction=report,
             evidence_ignore=frozenset(task.loaded.spec.evidence_ignore),
             static_context=task.static_context,
+            reads=task.samplers.state_reads(),
+            trusted=trusted_streams(self.predictor),
         )
 
 
@@ -563,7 +575,9 @@ class SequentialPlanner(Planner):
                 break
         execution_s = oracle_s = None
         if bound is not None:
-            execution_s = sum(float(getattr(v, "seconds", 0.0)) for v in _trajectories(bound))
+            execution_s = execution_seconds(
+                task.samplers, bound.skeleton.actions, bound.skeleton.stream_plan, bound.values
+            )
             oracle_s = recorder.solved(execution_s, skeleton_seconds(task))
         status = "solved" if bound is not None else "timeout"
         return PlannerOutcome(status, bound, execution_s, oracle_s, queries, tried)
@@ -669,13 +683,6 @@ class _SequentialRecorder:
             oracle_s=oracle,
         )
         return oracle
-
-
-def _trajectories(bound: BoundPlan) -> list[Any]:
-    """The plan's values that take time to execute: those with ``seconds``, as the stream
-    runtime counts a query's execution seconds (planner.streams.runtime)."""
-    used = {a for act in bound.skeleton.actions for a in act.args}
-    return [v for k, v in bound.values.items() if k in used and hasattr(v, "seconds")]
 
 
 # --- the registry ------------------------------------------------------------------------------

@@ -4,8 +4,10 @@ validation, for any domain.
 A plan file is JSON: ``format`` (:data:`FORMAT`), ``domain`` (its name) and ``domain_path`` (the
 folder it was loaded from, so ``tamp validate`` finds a domain that is not installed), ``scene``,
 ``seed``, ``actions`` (``"(move q0 opt-q1 opt-t2)"``), ``streams`` (the stream plan: stream,
-inputs, outputs and the facts each needs and certifies) and ``values`` (each object an action
-uses that has a value, as JSON by the domain's value types).
+inputs, outputs and the facts each needs and certifies), ``values`` (each object an action
+uses that has a value, as JSON by the domain's value types) and ``python`` (for a value that
+was a numpy array or a list, what it was: :func:`planner.values.python_shape`, so it is read
+back as one).
 
 Validation: the domain's validator when it has one (the kitchen replays the plan in simulation);
 otherwise the plan is replayed fact by fact (every stream's inputs produced earlier and domain
@@ -17,7 +19,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +28,7 @@ from planner.abstract.skeleton import AbstractPlan, GroundAction, PlanReplayErro
 from planner.domains.spec import LoadedDomain, PlanCheck
 from planner.pddl.structs import Atom, Problem
 from planner.streams.runtime import StreamRuntime
-from planner.values import ValueDecodeError
+from planner.values import ValueDecodeError, python_shape, restore
 
 FORMAT = "guided-tamp/plan-v1"
 
@@ -47,14 +49,18 @@ class PlanFile:
     streams: tuple[StreamInstance, ...] | None  # None: a file written without its stream plan
     values: Mapping[str, Any]  # JSON
     source: str
+    python: Mapping[str, Any] = field(default_factory=dict)  # value name -> its Python shape
 
     def decoded_values(self, loaded: LoadedDomain) -> dict[str, Any]:
+        """The values as the samplers made them (numpy arrays and lists as such)."""
+        out = {}
         try:
-            return {
-                k: loaded.decode(v, f"{self.source}: values.{k}") for k, v in self.values.items()
-            }
+            for k, v in self.values.items():
+                where = f"{self.source}: values.{k}"
+                out[k] = restore(loaded.decode(v, where), self.python.get(k), where)
         except ValueDecodeError as exc:
             raise PlanFileError(str(exc)) from exc
+        return out
 
 
 def _fact(atom: Atom) -> list[str]:
@@ -95,6 +101,13 @@ def plan_to_dict(
             n: loaded.encode(values[n])
             for n in sorted(used)
             if n in values and not isinstance(values[n], str)
+        },
+        "python": {
+            n: shape
+            for n in sorted(used)
+            if n in values
+            and not isinstance(values[n], str)
+            and (shape := python_shape(values[n])) is not None
         },
     }
 
@@ -166,6 +179,9 @@ def parse_plan(data: Any, source: str) -> PlanFile:
     if not isinstance(raw_values, dict):
         raise PlanFileError(f"{source}: values: expected an object")
     streams = _streams(data["streams"], f"{source}: streams") if "streams" in data else None
+    python = data.get("python", {})
+    if not isinstance(python, dict):
+        raise PlanFileError(f"{source}: python: expected an object (value name -> its shape)")
     return PlanFile(
         domain,
         path if isinstance(path, str) else None,
@@ -175,6 +191,7 @@ def parse_plan(data: Any, source: str) -> PlanFile:
         streams,
         raw_values,
         source,
+        python,
     )
 
 
@@ -224,13 +241,59 @@ def validate(
     if missing:
         return PlanCheck(False, f"invalid: no value for {', '.join(missing)}")
     tests = [inst for inst in streams if not inst.outputs]
-    if runtime is not None:
-        for inst in tests:
-            result = runtime.query(inst.stream, tuple(values.get(n, n) for n in inst.inputs))
-            if not result.success:
-                why = result.error or result.reason or "it is false"
-                return PlanCheck(False, f"invalid: test {inst} fails on the bound values ({why})")
+    if runtime is None:
+        return PlanCheck(True, "valid (replayed fact by fact; the domain has no validator)")
+    for inst in tests:
+        # A fresh key: the test is asked anew, whatever the search asked it before (a
+        # PDDLStream test answers once per input binding).
+        inputs = tuple(values.get(n, n) for n in inst.inputs)
+        result = runtime.query(inst.stream, inputs, key=object())
+        if result.error is not None:
+            return PlanCheck(
+                False, f"invalid: test {inst} raised on the bound values: {result.error}"
+            )
+        if not result.success:
+            why = f" ({result.reason})" if result.reason else ""
+            return PlanCheck(False, f"invalid: test {inst} says false on the bound values{why}")
+    try:
+        seconds = execution_seconds(runtime, actions, streams, values)
+    except ValueError as exc:
+        return PlanCheck(False, f"invalid: {exc}")
     how = "replayed fact by fact"
-    if runtime is not None and tests:
+    if tests:
         how += f", {len(tests)} tests asked again"
-    return PlanCheck(True, f"valid ({how}; the domain has no validator)")
+    message = f"valid ({how}; the domain has no validator)"
+    return PlanCheck(True, message + execution_note(loaded, seconds), seconds)
+
+
+def execution_seconds(
+    runtime: StreamRuntime,
+    actions: Sequence[GroundAction],
+    streams: Sequence[StreamInstance],
+    values: Mapping[str, Any],
+) -> float:
+    """Seconds to execute a bound plan: of each stream in its stream plan whose outputs an
+    action uses, what the runtime says those outputs take (``DomainSpec.execution_s``, else
+    their ``seconds``)."""
+    used = {a for act in actions for a in act.args}
+    total = 0.0
+    for inst in streams:
+        if inst.outputs and any(o in used for o in inst.outputs):
+            outputs = tuple(values[o] for o in inst.outputs)
+            total += runtime.execution_seconds(inst.stream, outputs)
+    return total
+
+
+EXECUTION_UNKNOWN = (
+    "; execution 0 s: no value of the plan says how long it takes to execute (a trajectory "
+    "that is a plain list); give its class a `seconds` property or the domain "
+    "DomainSpec.execution_s (docs/domains.md, From PDDLStream)"
+)
+
+
+def execution_note(loaded: LoadedDomain, seconds: float | None) -> str:
+    """What to add to a plan's message when its execution takes 0 s only because nothing
+    says how long its values take (:data:`EXECUTION_UNKNOWN`); empty otherwise."""
+    if seconds is None or seconds > 0 or loaded.spec.execution_s is not None:
+        return ""
+    return EXECUTION_UNKNOWN

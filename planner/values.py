@@ -292,6 +292,56 @@ def numbers(data: JSON, n: int, where: str) -> list[float]:
     return [float(v) for v in data]
 
 
+# --- Python shapes: what a JSON value was in Python, where decoding alone would not say -------
+
+
+def python_shape(value: Any) -> JSON:
+    """What :meth:`ValueCodec.decode` cannot tell from a value's JSON: that it was a numpy array
+    (``"ndarray:float64"``), a list (``["list", [item shapes]]``) or a tuple holding such
+    (``["tuple", [...]]``); None where decoding gives the value back as it was (names,
+    numbers, tuples of them, a declared value type's values). Plan files keep it beside the
+    JSON, so a validator gets back the numpy arrays and lists its samplers made."""
+    if value is None or isinstance(value, str | bool | int | float):
+        return None
+    if type(value).__module__.startswith("numpy") and hasattr(value, "dtype"):
+        if getattr(value, "ndim", 0) == 0:
+            return f"scalar:{value.dtype}"
+        return f"ndarray:{value.dtype}"
+    if isinstance(value, list | tuple):
+        items = [python_shape(v) for v in value]
+        if isinstance(value, tuple) and all(i is None for i in items):
+            return None
+        return [type(value).__name__, items]
+    return None
+
+
+def restore(value: Any, shape: JSON, where: str) -> Any:
+    """``value`` (as decoded) made again what :func:`python_shape` said it was."""
+    if shape is None:
+        return value
+    if isinstance(shape, str) and shape.partition(":")[0] in ("ndarray", "scalar"):
+        import numpy as np  # only where a plan holds numpy values
+
+        kind, _, dtype = shape.partition(":")
+        try:
+            array = np.asarray(value, dtype=np.dtype(dtype))
+        except (TypeError, ValueError) as exc:
+            raise ValueDecodeError(f"{where}: not a numpy {dtype} value: {exc}") from exc
+        return array[()] if kind == "scalar" else array
+    if (
+        isinstance(shape, list)
+        and len(shape) == 2
+        and shape[0] in ("list", "tuple")
+        and isinstance(shape[1], list)
+        and isinstance(value, tuple | list)
+        and len(shape[1]) == len(value)
+    ):
+        pairs = enumerate(zip(value, shape[1], strict=True))
+        items = [restore(v, s, f"{where}[{i}]") for i, (v, s) in pairs]
+        return items if shape[0] == "list" else tuple(items)
+    raise ValueDecodeError(f"{where}: its Python shape {_short(shape)} does not fit the value")
+
+
 def check_value_types(types: Iterable[Any], where: str) -> tuple[ValueType, ...]:
     """The value types of a domain, each checked; the error names ``where`` (the domain)."""
     out = []

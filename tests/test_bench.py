@@ -95,6 +95,17 @@ def test_a_resumed_benchmark_finds_its_model_by_content(tmp_path: Path) -> None:
     assert locate_model(config, None) == config  # recorded before models were hashed
 
 
+def test_model_priors_runs_learned_on_the_stores_priors_though_the_domain_ships_a_model() -> None:
+    """``--model priors``: a learned trial runs as on a domain without a model (the priors of
+    the benchmark's store), though kitchen ships one; no model file is read or hashed."""
+    config = make_config(
+        "kitchen-4", ["baseline", "learned"], trials=2, seed_start=1000, budget_s=10, model="priors"
+    )
+    assert check(config) == {"model": "priors", "training_seeds": None}
+    assert {t.model for t in trial_order(config) if t.planner == "learned"} == {"priors"}
+    assert locate_model(config, None) == config
+
+
 def test_a_model_order_gives_every_tree_search_the_model_and_is_kept_for_resume() -> None:
     config = make_config(
         "kitchen-4", ["baseline", "learned"], trials=2, seed_start=1000, budget_s=10, order="model"

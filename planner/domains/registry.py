@@ -64,7 +64,7 @@ class DomainInfo:
 
 
 _lock = threading.RLock()
-_cache: dict[tuple[Path, tuple[float, ...]], LoadedDomain] = {}
+_cache: dict[tuple[Path, tuple[float, ...], Path | None], LoadedDomain] = {}
 _warned: set[Path] = set()  # folders whose inferred declarations were logged
 _extra_folders: list[Path] = []  # added in this process (tamp serve --domain PATH)
 
@@ -77,8 +77,8 @@ def add_domain_folder(path: str | Path) -> LoadedDomain:
     process (``tamp serve --domain PATH``)."""
     loaded = load_domain_folder(path)
     with _lock:
-        if loaded.directory not in _extra_folders:
-            _extra_folders.append(loaded.directory)
+        if loaded.home not in _extra_folders:
+            _extra_folders.append(loaded.home)
     return loaded
 
 
@@ -200,15 +200,22 @@ def _import_folder(folder: Path) -> ModuleType:
     return sys.modules[package]
 
 
-def _load(spec: DomainSpec, directory: Path, source: str) -> LoadedDomain:
+def _load(
+    spec: DomainSpec, directory: Path, source: str, folder: Path | None = None
+) -> LoadedDomain:
     directory = directory.resolve()
+    if not directory.is_dir():
+        raise DomainLoadError(
+            f"domain {spec.name!r} ({source}): DomainSpec.directory {directory} is not a folder"
+        )
     missing = [f for f in PDDL_FILES if not (directory / f).is_file()]
     if missing:
+        where = "" if spec.directory is None else " (DomainSpec.directory)"
         raise DomainLoadError(
-            f"domain {spec.name!r} ({source}): {directory} has no {' and no '.join(missing)}"
+            f"domain {spec.name!r} ({source}): {directory}{where} has no {' and no '.join(missing)}"
         )
     stamps = tuple((directory / f).stat().st_mtime for f in PDDL_FILES)
-    key = (directory, stamps)
+    key = (directory, stamps, folder)
     with _lock:
         cached = _cache.get(key)
         if cached is not None and cached.spec is spec:
@@ -245,7 +252,9 @@ def _load(spec: DomainSpec, directory: Path, source: str) -> LoadedDomain:
         types = check_value_types(spec.value_types, f"domain {spec.name!r}")
     except ValueTypeError as exc:
         raise DomainLoadError(f"{exc} ({source})") from exc
-    loaded = LoadedDomain(spec, domain, streams, directory, source, ValueCodec(types))
+    loaded = LoadedDomain(
+        spec, domain, streams, directory, source, ValueCodec(types), folder=folder
+    )
     with _lock:
         _cache[key] = loaded
     return loaded
@@ -262,13 +271,20 @@ def load_domain_folder(path: str | Path) -> LoadedDomain:
             "stream.pddl and domain.py)"
         )
     folder = folder.resolve()
-    missing = [f for f in PDDL_FILES if not (folder / f).is_file()]
-    if missing:
-        raise DomainLoadError(f"{folder}: no {' and no '.join(missing)} in the domain folder")
+    if not any((folder / f).is_file() for f in MODULE_FILES):
+        missing = [f for f in PDDL_FILES if not (folder / f).is_file()]
+        if missing:  # neither the files nor a module that could say where they are
+            raise DomainLoadError(
+                f"{folder}: no {' and no '.join(missing)} in the domain folder, and no "
+                f"{' or '.join(MODULE_FILES)} (a module whose DomainSpec.directory names "
+                "where they are)"
+            )
     module = _import_folder(folder)
     spec = _domain_object(module, f"{module.__file__ or folder}")
-    directory = spec.directory.resolve() if spec.directory is not None else folder
-    return _load(spec, directory, f"folder {folder}")
+    directory = folder
+    if spec.directory is not None:  # relative: against the domain folder
+        directory = (folder / spec.directory).resolve()
+    return _load(spec, directory, f"folder {folder}", folder)
 
 
 def _installed() -> dict[str, tuple[metadata.EntryPoint | Path, str]]:
@@ -310,7 +326,7 @@ def domain_infos() -> list[DomainInfo]:
             log.warning("domain %s (%s) is skipped: %s", name, source, exc)
             out.append(DomainInfo(name, source, None, f"{type(exc).__name__}: {exc}"))
             continue
-        out.append(DomainInfo(name, source, str(loaded.directory), None, loaded.spec.description))
+        out.append(DomainInfo(name, source, str(loaded.home), None, loaded.spec.description))
     return out
 
 
@@ -426,12 +442,12 @@ def domain_of_scene(scene: Scene, domain: LoadedDomain | str | Path | None = Non
     if given is not None:
         if scene.domain == given.name:
             return given
-        same = base is not None and (base / scene.domain).resolve() == given.directory
+        same = base is not None and (base / scene.domain).resolve() == given.home
         if _looks_like_path(scene.domain) and same:
             return given
         raise scene.field_error(
             "domain",
-            f"scene is for {scene.domain!r}, not {given.name!r} ({given.directory})",
+            f"scene is for {scene.domain!r}, not {given.name!r} ({given.home})",
         )
     try:
         return load_domain(scene.domain, base=base if _looks_like_path(scene.domain) else None)

@@ -47,6 +47,8 @@ class PlanCheck:
 
 # The bound plan's actions, the values of its objects (optimistic ones bound), the problem.
 PlanValidator = Callable[[Sequence[GroundAction], Mapping[str, Any], Problem], PlanCheck]
+# Seconds to execute what a stream produced: (stream name, its output values, the problem).
+ExecutionSeconds = Callable[[str, tuple[Any, ...], Problem], float]
 
 
 # --- the feature hook: what planner.learning.features asks of a domain ----------------------------
@@ -139,6 +141,9 @@ class DomainSpec:
     # Strings, numbers and number sequences need none (built in).
     value_types: tuple[ValueType, ...] = ()
     validate: PlanValidator | None = None  # None: the plan is replayed symbolically
+    # How long the robot takes to execute what a stream produced (a PDDLStream trajectory that
+    # is a plain list of configurations); None: the outputs' own ``seconds`` properties.
+    execution_s: ExecutionSeconds | None = None
     # What every query's context carries besides its state (JSON, e.g. the sizes of the
     # scene's tables); recorded with each query and given to the learned models.
     static_context: StaticContext | None = None
@@ -158,7 +163,9 @@ class DomainSpec:
     # ... and per stream, fluents of its context its sampler never reads (the model's stream
     # order, planner/search/order.py, need not bind the objects they name first).
     unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
-    directory: Path | None = None  # where its PDDL files are; None: the module's folder
+    # Where its domain.pddl and stream.pddl are (a PDDLStream example's own folder, say); None:
+    # the module's folder. A folder domain keeps its module and scenes in its folder either way.
+    directory: Path | None = None
     # Refuse what PDDLStream's leniency accepts (undeclared predicates and functions, repeated
     # declarations; `tamp check` lists them); False: accept them with a warning
     strict: bool = False
@@ -170,6 +177,17 @@ class DomainSpec:
             raise ValueError(f"domain {self.name!r}: problem_from_scene must be a function")
         if self.bindings is not None and not callable(self.bindings):
             raise ValueError(f"domain {self.name!r}: bindings must be a function or None")
+        if self.execution_s is not None and not callable(self.execution_s):
+            raise ValueError(f"domain {self.name!r}: execution_s must be a function or None")
+
+
+def _problem_durations(
+    hook: ExecutionSeconds, problem: Problem
+) -> Callable[[str, tuple[Any, ...]], float]:
+    def durations(stream: str, outputs: tuple[Any, ...]) -> float:
+        return hook(stream, outputs, problem)
+
+    return durations
 
 
 @dataclass(frozen=True)
@@ -182,15 +200,30 @@ class LoadedDomain:
     directory: Path  # the folder of domain.pddl and stream.pddl
     source: str  # how it was found: "folder PATH" or "entry point NAME = MODULE:ATTR"
     codec: ValueCodec = field(repr=False)
+    # The folder it was loaded from (a domain found by path): its module and its scenes. Its
+    # PDDL files are there too unless DomainSpec.directory names another folder. None for an
+    # installed domain (an entry point).
+    folder: Path | None = None
 
     @property
     def name(self) -> str:
         return self.spec.name
 
     @property
+    def home(self) -> Path:
+        """The domain's own folder: the one it was loaded from, else that of its PDDL files."""
+        return self.folder if self.folder is not None else self.directory
+
+    @property
     def scenes_dir(self) -> Path:
         """Where the domain keeps its scene files (may not exist)."""
-        return self.directory / "scenes"
+        return self.home / "scenes"
+
+    @property
+    def reference(self) -> str | None:
+        """What a run records to load this domain again in another process: the folder of a
+        domain loaded by path; None for an installed one (its name says it)."""
+        return None if self.folder is None else str(self.folder)
 
     def problem_from_scene(self, scene: Scene, *, seed: int = 0) -> Problem:
         """The scene's problem; ``seed`` draws its randomised parts."""
@@ -209,7 +242,14 @@ class LoadedDomain:
         """Samplers bound to the declared streams, seeded."""
         if self.spec.bindings is None:
             raise NotImplementedError(f"domain {self.name!r} has no stream samplers yet")
-        return bind_streams(self.streams, self.spec.bindings(problem, random.Random(seed)))
+        hook = self.spec.execution_s
+        durations = None if hook is None else _problem_durations(hook, problem)
+        return bind_streams(
+            self.streams,
+            self.spec.bindings(problem, random.Random(seed)),
+            strict=self.spec.strict,
+            durations=durations,
+        )
 
     def encode(self, value: Any) -> JSON:
         """A value as JSON, by the domain's value types."""

@@ -164,6 +164,22 @@ class CostModel:
     def streams(self) -> tuple[str, ...]:
         return tuple(sorted(set(self.networks) | set(self.priors)))
 
+    def trusted_streams(self) -> frozenset[str] | None:
+        """The streams whose network beat the prior on validation (log loss of ``P_S`` lower
+        than the prior's on the held-out runs); None when the file has no validation figures
+        (a model saved before they were kept: every stream trusted)."""
+        validation = self.metadata.get("validation")
+        if not isinstance(validation, dict) or not isinstance(validation.get("streams"), list):
+            return None
+        out = set()
+        for report in validation["streams"]:
+            if not isinstance(report, dict) or report.get("prior_used"):
+                continue
+            loss, prior = report.get("log_loss"), report.get("prior_log_loss")
+            if isinstance(loss, int | float) and isinstance(prior, int | float) and loss < prior:
+                out.add(str(report.get("stream")))
+        return frozenset(out)
+
     def prior(self, stream: str) -> Prior:
         return self.priors.get(stream, self.default_prior)
 

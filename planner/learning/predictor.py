@@ -24,6 +24,12 @@ class ModelPredictor:
     def load(cls, path: Path, *, domain: LoadedDomain) -> ModelPredictor:
         return cls(CostModel.load(path, domain=domain))
 
+    def trusted(self) -> frozenset[str] | None:
+        """The streams whose network predicted ``P_S`` better than the stream's prior on the
+        runs held out in training (validation log loss below the prior's), as the model file
+        records (LearnedConfig.trust); None when it records no validation (trust them all)."""
+        return self.model.trusted_streams()
+
     def predict_rows(
         self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
     ) -> list[StreamCost]:

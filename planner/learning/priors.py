@@ -9,15 +9,23 @@ what the paper's models predict before they have seen anything. No torch here.
 
 from __future__ import annotations
 
+import logging
 from collections import defaultdict
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from planner.search.learned import StreamCost
+
+if TYPE_CHECKING:
+    from planner.store import OutcomeSums
+from planner.streams.adapters import RESTATING, restates_contract
+
+log = logging.getLogger(__name__)
 
 Float64Array = npt.NDArray[np.float64]
 
@@ -114,9 +122,12 @@ class OutcomeLike(Protocol):
 
 
 def priors_from_records(records: Iterable[OutcomeLike]) -> dict[str, Prior]:
-    """Each stream's prior over the given queries."""
+    """Each stream's prior over the given queries, leaving out the answers that only restate
+    an adapter's contract (no sampler ran: :func:`planner.streams.adapters.restates_contract`)."""
     by_stream: dict[str, list[OutcomeLike]] = defaultdict(list)
     for r in records:
+        if not r.success and restates_contract(getattr(r, "reason", None)):
+            continue
         by_stream[r.stream].append(r)
     return {
         stream: Prior.from_outcomes(
@@ -124,6 +135,49 @@ def priors_from_records(records: Iterable[OutcomeLike]) -> dict[str, Prior]:
         )
         for stream, rs in sorted(by_stream.items())
     }
+
+
+def priors_from_store(path: Path, domain: str) -> tuple[dict[str, Prior], int]:
+    """Each stream's prior over the queries of the runs of ``domain`` (its name) recorded in
+    the store at ``path``, and how many queries that was. Reads only how each query ended (not
+    its inputs or context) and each run's scene once: a learned run on priors pays little for
+    it inside its planning clock, however large the store."""
+    from planner.domains import domain_of_scene, find_scene, load_domain
+    from planner.scene import SceneError
+    from planner.store import RunStore
+
+    with RunStore(path) as store:
+        runs = store.query_runs()
+        domains: dict[tuple[str, str | None], str | None] = {}
+        for scene, ref in set(runs.values()):
+            try:
+                given = load_domain(ref) if ref is not None else None
+                domains[(scene, ref)] = domain_of_scene(find_scene(scene, domain=given), given).name
+            except (OSError, ValueError, KeyError, SceneError) as exc:
+                log.warning("scene %s: cannot load it to tell its domain (%s)", scene, exc)
+                domains[(scene, ref)] = None
+        mine = sorted(run for run, key in runs.items() if domains[key] == domain)
+        sums = store.outcome_sums(mine, leave_out=RESTATING)
+    return priors_from_sums(sums), sum(s.n for s in sums)
+
+
+def priors_from_sums(sums: Iterable[OutcomeSums]) -> dict[str, Prior]:
+    """Each stream's prior from its queries summed by outcome (what
+    :func:`priors_from_records` computes one query at a time)."""
+    by_stream: dict[str, dict[bool, OutcomeSums]] = defaultdict(dict)
+    for s in sums:
+        by_stream[s.stream][s.success] = s
+    out = {}
+    for stream, parts in sorted(by_stream.items()):
+        ok, failed = parts.get(True), parts.get(False)
+        n_ok = ok.n if ok else 0
+        n = n_ok + (failed.n if failed else 0)
+        overall = ((ok.wall_s if ok else 0.0) + (failed.wall_s if failed else 0.0)) / max(n, 1)
+        r_s = ok.wall_s / ok.n if ok and ok.n else overall
+        r_f = failed.wall_s / failed.n if failed and failed.n else overall
+        r_m = ok.execution_s / ok.moved if ok and ok.moved else 0.0
+        out[stream] = Prior((n_ok + 1) / (n + 2), r_s, r_f, r_m, n)
+    return out
 
 
 class PriorPredictor:
@@ -135,6 +189,10 @@ class PriorPredictor:
 
     def prior(self, stream: str) -> Prior:
         return self.priors.get(stream, self.default)
+
+    def trusted(self) -> frozenset[str]:
+        """None: an average tells no query of a stream from another (LearnedConfig.trust)."""
+        return frozenset()
 
     def predict_rows(
         self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]

@@ -19,6 +19,7 @@ import dataclasses
 import json
 import logging
 import math
+from collections import Counter
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
@@ -43,6 +44,7 @@ from planner.learning.model import (
 from planner.learning.priors import Prediction, Prior
 from planner.scene import SceneError
 from planner.store import QueryRecord, RunStore
+from planner.streams.adapters import restates_contract
 
 log = logging.getLogger(__name__)
 
@@ -257,6 +259,10 @@ class TrainReport:
     val_runs: tuple[str, ...]
     seed: int
     epochs: int
+    # Per stream: the recorded queries used as rows (training and validation), and those left
+    # out, by why (an answer that only restates its adapter's contract: no sampler ran).
+    rows: Mapping[str, int] = dataclasses.field(default_factory=dict)
+    left_out: Mapping[str, Mapping[str, int]] = dataclasses.field(default_factory=dict)
 
     def stream(self, name: str) -> StreamReport:
         for s in self.streams:
@@ -272,6 +278,8 @@ class TrainReport:
             "train_runs": list(self.train_runs),
             "val_runs": list(self.val_runs),
             "streams": [asdict(s) for s in self.streams],
+            "rows": dict(self.rows),
+            "left_out": {k: dict(v) for k, v in self.left_out.items()},
         }
 
 
@@ -308,6 +316,17 @@ def format_report(report: TrainReport) -> str:
             f"{pair(s.log_loss, s.prior_log_loss):>16} {pair(s.mae_r_s, s.prior_mae_r_s):>20} "
             f"{pair(s.mae_r_f, s.prior_mae_r_f):>20} {pair(s.mae_r_m, s.prior_mae_r_m):>20}"
         )
+    lines.append("rows (recorded queries) per stream:")
+    for stream in sorted({*report.rows, *report.left_out}):
+        left = report.left_out.get(stream, {})
+        line = f"  {stream}: {report.rows.get(stream, 0)} used"
+        if left:
+            why = "; ".join(f"{n} {reason!r}" for reason, n in sorted(left.items()))
+            line += (
+                f", {sum(left.values())} left out: answers that only restate the adapter's "
+                f"contract, no sampler ran ({why})"
+            )
+        lines.append(line)
     return "\n".join(lines)
 
 
@@ -379,6 +398,24 @@ class _Targets:
         wall = np.log(np.maximum(self.wall_s, MIN_SECONDS))
         execution = np.log(np.maximum(self.execution_s, MIN_SECONDS))
         return np.stack([wall, wall, execution], axis=1)
+
+
+def sampler_outcomes(
+    records: Sequence[QueryRecord],
+) -> tuple[list[QueryRecord], dict[str, Counter[str]]]:
+    """The queries that are the samplers' outcomes, and per stream how many were left out and
+    why: a failure whose reason only restates its adapter's contract (a PDDLStream function's
+    one output already given, a list used up, a test or an ended generator asked again,
+    :func:`planner.streams.adapters.restates_contract`) is no outcome of the sampler, which did
+    not run; no feature can predict it, and half the rows of a PDDLStream stream were such."""
+    kept: list[QueryRecord] = []
+    left: dict[str, Counter[str]] = {}
+    for r in records:
+        if not r.success and restates_contract(r.reason):
+            left.setdefault(r.stream, Counter())[str(r.reason)] += 1
+        else:
+            kept.append(r)
+    return kept, left
 
 
 def split_runs(
@@ -633,6 +670,13 @@ def train(
         raise ValueError(f"epochs must be >= 1, got {epochs}")
     if min_queries < 1:
         raise ValueError(f"min_queries must be >= 1, got {min_queries}")
+    given = records
+    records, left_out = sampler_outcomes(records)
+    if not records:
+        raise ValueError(
+            "no stream queries to train on: every recorded query only restates its adapter's "
+            "contract (no sampler ran)"
+        )
     train_runs, val_runs = split_runs(
         (r.run_id for r in records), val_fraction=val_fraction, seed=seed
     )
@@ -697,10 +741,11 @@ def train(
             "input_noise": INPUT_NOISE,
         },
     }
-    if isinstance(records, LoadedRecords):
-        meta["data"] = [str(p) for p in records.sources]
-        meta["scenes"] = sorted(set(records.run_scenes.values()))
-        meta["training_seeds"] = records.training_seeds()
+    meta["left_out"] = {k: dict(v) for k, v in left_out.items()}
+    if isinstance(given, LoadedRecords):
+        meta["data"] = [str(p) for p in given.sources]
+        meta["scenes"] = sorted(set(given.run_scenes.values()))
+        meta["training_seeds"] = given.training_seeds()
     meta.update(metadata or {})
     model = CostModel(featurizer, networks, priors, default_prior=default_prior, metadata=meta)
     reports = []
@@ -720,7 +765,16 @@ def train(
                 success_rate=succ,
             )
         )
-    report = TrainReport(tuple(reports), train_runs, val_runs, seed, epochs)
+    rows = {stream: sum(1 for r in records if r.stream == stream) for stream in streams}
+    report = TrainReport(
+        tuple(reports),
+        train_runs,
+        val_runs,
+        seed,
+        epochs,
+        rows,
+        {k: dict(v) for k, v in left_out.items()},
+    )
     # The file carries its validation figures (as plain JSON data, what a loaded file holds).
     model.metadata["validation"] = json.loads(json.dumps(report.to_dict(), allow_nan=False))
     return model, report

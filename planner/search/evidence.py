@@ -17,12 +17,19 @@ bound anything a failure below depends on.
 from __future__ import annotations
 
 import heapq
+import math
 from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from planner.search.costs import StreamCost, dead_after
+from planner.search.costs import (
+    DEAD_END_DOUBT,
+    DEAD_END_MIN,
+    P_FLOOR,
+    StreamCost,
+    dead_after,
+)
 from planner.search.tree import ROOT, Node, Tree
 
 _Source = int  # a dead end's source: the node whose own failures make it
@@ -37,6 +44,11 @@ class NodeQueries(Protocol):
 
     def relevant(self, node: Node) -> set[str]: ...
 
+    def precise(self, node: Node) -> bool:
+        """Whether ``relevant`` is what the next query reads (not the whole state, which a
+        sampler given the context may read)."""
+        ...
+
 
 @dataclass
 class Evidence:
@@ -44,6 +56,9 @@ class Evidence:
 
     queries: NodeQueries
     dead_ends: bool = True  # dead_ends
+    # An exhausted node (its stream said it has nothing more for these inputs) with nothing
+    # live below is a dead end at once, whatever its prediction (LearnedConfig.exhausted_dead).
+    exhausted_dead: bool = True
     # Per dead node: its reason (the union of its marks' reasons).
     reasons: dict[int, frozenset[str]] = field(default_factory=dict)
     _seen: int = 0
@@ -55,6 +70,7 @@ class Evidence:
     _changed: set[int] = field(default_factory=set)
     _queue: list[int] = field(default_factory=list)
     _queued: set[int] = field(default_factory=set)
+    _survivals: dict[int, float] = field(default_factory=dict)  # see _survival
 
     @property
     def dead(self) -> Mapping[int, frozenset[str]]:
@@ -97,18 +113,62 @@ class Evidence:
         return found
 
     def _evaluate(self, tree: Tree, node: Node) -> None:
-        """Whether the node's own failures make it a dead end, and why."""
+        """Whether the node's own failures make it a dead end, and why. An exhausted node
+        with nothing live below is one at once (with ``exhausted_dead``, where what its query
+        reads is known): its stream will give nothing more, so its reason is what its failed
+        queries (if any) and the dead ends below it depend on."""
         reason: frozenset[str] | None = None
         first = self.queries.first(node) if node.success and node.depth > 0 else None
-        if (
-            first is not None
-            and node.children
-            and not self._live[node.id]
-            and len(node.children) >= self._threshold_of(node, first)
-        ):
-            below = self._below.get(node.id)
-            reason = frozenset(self.queries.relevant(node)) | frozenset(below or ())
+        if first is not None and node.children and not self._live[node.id]:
+            below = frozenset(self._below.get(node.id) or ())
+            if self._unexplained(tree, node, first):
+                reason = frozenset(self.queries.relevant(node)) | below
+            elif self.exhausted_dead and node.exhausted and self.queries.precise(node):
+                failed = any(not tree[c].success for c in node.children)
+                reason = below | (frozenset(self.queries.relevant(node)) if failed else frozenset())
         self._set_source(tree, node.id, node, reason)
+
+    def _unexplained(self, tree: Tree, node: Node, first: StreamCost) -> bool:
+        """Whether the node's children, none of them alive, failed more often than the
+        predictions explain: each failed child (or dead end below) counts as a failure of the
+        node's query (:func:`dead_after` of its prediction). A child that died exhausted (its
+        one-answer streams below said false: with ``exhausted_dead``) failed as often as the
+        predictions of the queries down to its failure say: with a placement predicted sure but
+        its collision tests doubtful, many placements may die before the node above is to blame."""
+        children = node.children
+        if not self.exhausted_dead or not any(
+            tree[c].exhausted and tree[c].success for c in children
+        ):
+            return len(children) >= self._threshold_of(node, first)
+        if len(children) < DEAD_END_MIN:
+            return False
+        doubt = 0.0
+        for c in children:
+            child = tree[c]
+            chance = first.p_s
+            if child.success and child.exhausted:
+                chance = self._survival(tree, child, first.p_s)
+            doubt += math.log(max(1.0 - min(max(chance, P_FLOOR), 1.0), P_FLOOR))
+        return doubt < math.log(DEAD_END_DOUBT)
+
+    def _survival(self, tree: Tree, child: Node, p_s: float) -> float:
+        """The predicted chance that ``child`` (made with chance ``p_s``) got past the queries
+        below it down to its failure: the product of their predictions along the way (kept
+        once computed: a dead child's subtree grows no more)."""
+        found = self._survivals.get(child.id)
+        if found is not None:
+            return found
+        chance = p_s
+        current = child
+        while current.children:
+            predicted = self.queries.first(current)
+            if predicted is not None:
+                chance *= predicted.p_s
+            failed = [c for c in current.children if not tree[c].success]
+            current = tree[failed[0]] if failed else tree[current.children[0]]
+        if child.dead:
+            self._survivals[child.id] = chance
+        return chance
 
     # --- marks -------------------------------------------------------------------------------
 

@@ -30,6 +30,13 @@ from typing import Any, Protocol
 
 from planner.abstract.skeleton import AbstractPlan
 from planner.pddl.structs import Atom
+from planner.search.baseline import (
+    BaselineConfig,
+    failure_value,
+    should_widen,
+    success_value,
+    ucb,
+)
 from planner.search.costs import (
     DEAD_END_MAX,
     StreamCost,
@@ -52,6 +59,7 @@ __all__ = [
     "remaining_cost",
     "row_names",
     "stream_rows",
+    "trusted_streams",
 ]
 
 Row = tuple[str, list[Any | None], dict[str, Any]]  # stream, encoded inputs, context
@@ -116,6 +124,14 @@ class Predictor(Protocol):
     def predict_rows(
         self, rows: Sequence[tuple[str, Sequence[Any | None], Mapping[str, Any]]]
     ) -> list[StreamCost]: ...
+
+
+def trusted_streams(predictor: Predictor) -> frozenset[str] | None:
+    """The streams whose predictions a search may trust (``LearnedConfig.trust``), as the
+    predictor says (its ``trusted()``: a trained model's validation, none for priors); None
+    (trust all) for a predictor that does not say."""
+    said = getattr(predictor, "trusted", None)
+    return None if said is None else said()
 
 
 @dataclass(frozen=True)
@@ -189,6 +205,37 @@ class LearnedConfig:
     keep failing far down is left only once its failures make dead ends (kitchen-12 seed 1008
     planned 332 s with it, 142 s without)."""
 
+    trust: bool = True
+    """The search trusts a stream's predictions only where the model showed, on the runs it
+    held out, that it tells that stream's outcomes apart better than the stream's average (its
+    validation log loss of ``P_S`` below its prior's; ``tamp train`` prints both). Priors are
+    never trusted. A choice that no trusted prediction informs (at a node none of whose
+    remaining streams is trusted: every child is then estimated alike but for how far it got)
+    follows the baseline's rules instead: query again when the node's visits exceed eTAMP's
+    widening bound, descend by UCB on what the rollouts below reached; and with no trusted
+    stream at all (priors only, a model that learned nothing) the stream plans are opened and
+    chosen as the baseline does. A model file without validation figures is trusted
+    throughout. Why: on a domain it has never seen, estimates that cannot tell bindings apart
+    turned the search depth-first (it went where it had got furthest, with little exploration)
+    and ranked stream plans by their length instead of the top-k planner's cost.
+
+    Measured: see docs/BENCHMARKS.md, *Trusting estimates*."""
+
+    exhausted_dead: bool = True
+    """With ``dead_ends``: a node whose stream said it has nothing more for its inputs (an
+    exhausted PDDLStream function, test or list) and that has nothing live below it is a dead
+    end at once, its reason what its failed queries and the dead ends below it depend on, where
+    that is known (the stream's sampler reads its inputs and declared fluents, not the whole
+    state: a guessed reason backjumps too far); and
+    the node above counts each such child as a failure as likely as the predictions of the
+    queries down to where it died say (a placement predicted sure whose collision tests are
+    doubtful may die many times before the placement it collides with is to blame). So a
+    placement that left no room for the next block is backjumped from. Off: an exhausted node
+    is left alone (never queried again) but counts as a live success for the node above,
+    which keeps re-sampling below a choice that left no room (the issue's 4,429 placements).
+
+    Measured: see docs/BENCHMARKS.md, *Trusting estimates*."""
+
     doubt_plans: bool = True
     """A stream plan that relies on a stream instance the search doubts (the same instance of
     the optimistic task, over every plan and node, asked often with no success, or proved
@@ -254,6 +301,9 @@ class _Queries:
     def relevant(self, node: Node) -> set[str]:
         return self.policy._relevant(node)
 
+    def precise(self, node: Node) -> bool:
+        return self.policy._precise(node)
+
 
 @dataclass
 class LearnedPolicy:
@@ -269,6 +319,13 @@ class LearnedPolicy:
     config: LearnedConfig = field(default_factory=LearnedConfig)
     on_prediction: Callable[[Node, StreamCost, float], None] | None = None
     evidence_ignore: frozenset[str] = frozenset()  # fluents a failure does not depend on
+    # Per stream, the fluents its sampler can read (its declared :fluents); a stream not named
+    # here reads the whole state (a sampler given the context). A PDDLStream stream with no
+    # :fluents reads only its inputs, so its failures depend on nothing else.
+    reads: Mapping[str, frozenset[str]] = field(default_factory=dict)
+    # The streams whose predictions the search trusts (LearnedConfig.trust); None: all.
+    trusted: frozenset[str] | None = None
+    baseline: BaselineConfig = field(default_factory=BaselineConfig)  # for untrusted choices
     static_context: Mapping[str, Any] = field(default_factory=dict)  # in every row's context
     _q: dict[int, float] = field(default_factory=dict)  # Eq. 4 of each predicted node
     # Per node predicted: the prediction of each stream from its depth on; a child's rows that
@@ -286,13 +343,17 @@ class LearnedPolicy:
         default_factory=dict
     )  # per state object: its fluent facts (one object for equal sets: keys compare by identity)
     _fluent_sets: dict[frozenset[Atom], frozenset[Atom]] = field(default_factory=dict)
+    _informed_at: dict[tuple[int, int], bool] = field(default_factory=dict)
+    _trusting: tuple[int, bool] | None = None  # (plans seen, whether any stream is trusted)
     _doubted: frozenset[tuple[str, tuple[str, ...]]] = frozenset()  # instances the search doubts
     _doubted_plans: dict[int, bool] = field(default_factory=dict)  # per plan: relies on one
 
     def __post_init__(self) -> None:
         c = self.config
         self.encode = remembered(self.encode)
-        self._evidence = Evidence(_Queries(self), dead_ends=c.dead_ends)
+        self._evidence = Evidence(
+            _Queries(self), dead_ends=c.dead_ends, exhausted_dead=c.exhausted_dead
+        )
 
     @property
     def evidence(self) -> Evidence:
@@ -476,18 +537,26 @@ class LearnedPolicy:
 
     def _relevant(self, node: Node) -> set[str]:
         """Objects the outcome of ``node``'s next query depends on: its inputs and the objects of
-        the fluent facts of its context, but for ``evidence_ignore``'s; a fresh set each call."""
+        the fluent facts of its context that its sampler can read (``reads``), but for
+        ``evidence_ignore``'s; a fresh set each call."""
         where = (node.plan_index, node.depth)
         found = self._relevant_at.get(where)
         if found is None:
             inst = self.skeletons[node.plan_index].stream_plan[node.depth]
             facts = self.states[node.plan_index][node.depth]
+            readable = self.reads.get(inst.stream, self.fluents)
             out = set(inst.inputs)
             for a in facts:
-                if a.predicate in self.fluents and a.predicate not in self.evidence_ignore:
+                if a.predicate in readable and a.predicate not in self.evidence_ignore:
                     out.update(a.args)
             found = self._relevant_at[where] = frozenset(out)
         return set(found)
+
+    def _precise(self, node: Node) -> bool:
+        """Whether what ``node``'s next query depends on is known (its sampler reads its
+        inputs and declared fluents only, ``reads``), not the whole state it is given."""
+        inst = self.skeletons[node.plan_index].stream_plan[node.depth]
+        return inst.stream in self.reads
 
     def _estimate(self, tree: Tree, node: Node) -> float:
         """The node's estimate as of the last refresh (its Q before the first); a plan's node
@@ -518,18 +587,55 @@ class LearnedPolicy:
     def _bonus(self, visits: int, parent_visits: int) -> float:
         return self.config.c_explore * math.sqrt(math.log(parent_visits + 1) / (visits + 1))
 
+    # --- trust (LearnedConfig.trust) -----------------------------------------------------------
+
+    @property
+    def trusting(self) -> bool:
+        """Whether any stream of the plans has trusted predictions (always, with ``trust``
+        off); worked out again only when plans are added."""
+        if not self.config.trust or self.trusted is None:
+            return True
+        if self._trusting is None or self._trusting[0] != len(self.skeletons):
+            trusted = self.trusted
+            found = any(i.stream in trusted for p in self.skeletons for i in p.stream_plan)
+            self._trusting = (len(self.skeletons), found)
+        return self._trusting[1]
+
+    def _informed(self, node: Node) -> bool:
+        """Whether a trusted prediction informs the choice at ``node``: some stream from its
+        depth on is trusted (always, with ``trust`` off)."""
+        if not self.config.trust or self.trusted is None:
+            return True
+        where = (node.plan_index, node.depth)
+        found = self._informed_at.get(where)
+        if found is None:
+            rest = self.skeletons[node.plan_index].stream_plan[node.depth :]
+            found = self._informed_at[where] = any(i.stream in self.trusted for i in rest)
+        return found
+
+    def _ucb(self, tree: Tree, node: Node, parent: Node, c: float) -> float:
+        return ucb(node.value, node.visits, parent.visits, c)
+
     # --- the Policy protocol -----------------------------------------------------------------
 
     def initial_plans(self, total: int) -> int:
-        return total  # every stream plan is scored from the start
+        # every stream plan is scored from the start; untrusting, they open as the baseline's
+        return total if self.trusting else 0
 
     def add_plan(self, tree: Tree, plans_added: int, plans_total: int) -> bool:
-        return plans_added < plans_total  # only if initial_plans left some closed
+        if self.trusting:
+            return plans_added < plans_total  # only if initial_plans left some closed
+        if plans_added >= plans_total:
+            return False
+        root = tree[ROOT]
+        return plans_added == 0 or root.visits > self.baseline.root_widen_k * plans_added**2
 
     def pick_plan(self, tree: Tree) -> Node:
         self._refresh(tree)
         root = tree[ROOT]
         plans = tree.live_children(ROOT)  # not the dead (exhausted) ones
+        if not self.trusting:
+            return max(plans, key=lambda n: self._ucb(tree, n, root, self.baseline.c_plan))
         if self._scale <= 0:
             self._scale = max(min(self.q(tree, p) for p in plans), 1e-3)
         if self.config.plans_by_estimate:  # max keeps the first of equals: the top-k order
@@ -544,8 +650,11 @@ class LearnedPolicy:
         than every open plan: a fresh plan at the lowest Q any plan had when it was opened
         (before anything was bound), plus the seconds a request takes; the open plans at their
         estimates (progress lowers one, dead ends raise it). Without ``plans_by_estimate``
-        each side gets UCT's bonus too, the fresh plan's by the requests made."""
+        each side gets UCT's bonus too, the fresh plan's by the requests made. Trusting no
+        stream (``trust``), the baseline's widening rule at the root."""
         self._refresh(tree)
+        if not self.trusting:
+            return tree[ROOT].visits > self.baseline.root_widen_k * plans_open**2
         plans = tree.live_children(ROOT)
         if not plans:
             return True
@@ -574,6 +683,8 @@ class LearnedPolicy:
         live = tree.live_children(node.id)
         if not live:
             return True
+        if not self._informed(node):
+            return should_widen(node.visits, len(node.children), self.baseline.widen_k)
         again = self._value(self.q(tree, node)) + self._bonus(len(node.children), node.visits)
         best = max(
             self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits) for c in live
@@ -581,14 +692,24 @@ class LearnedPolicy:
         return again > best
 
     def pick_child(self, tree: Tree, node: Node) -> Node:
+        if not self._informed(node):
+            return max(
+                tree.live_children(node.id),
+                key=lambda c: self._ucb(tree, c, node, self.baseline.c_node),
+            )
         return max(
             tree.live_children(node.id),
             key=lambda c: self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits),
         )
 
     def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:
-        """1 for a bound plan, 0 otherwise (the choices read Q, refreshed every iteration)."""
-        return 1.0 if leaf.success and leaf.depth == len(plan.stream_plan) else 0.0
+        """The baseline's values (a bound plan 1 and more, a failure by how far it got): the
+        estimates read Q, refreshed every iteration; choices no trusted prediction informs read
+        these, as the baseline does."""
+        depth = len(plan.stream_plan)
+        if leaf.success and leaf.depth == depth:
+            return success_value([1.0] * len(plan.actions), self.baseline)
+        return failure_value(leaf.depth - 1, depth, self.baseline)
 
     def observe(self, tree: Tree, nodes: Sequence[Node]) -> None:
         """Predict the nodes a rollout made, in one batch, so every node carries a prediction

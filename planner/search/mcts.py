@@ -292,8 +292,9 @@ class TreeSearch:
         )
         self.asked = 0  # requests for more skeletons this search made
         self._reusable = [self._leaves(i) for i in range(len(self.skeletons))] if reuse else []
-        # identity -> (node, outputs, wall seconds) of its first success
-        self._results: dict[str, tuple[int, tuple[Any, ...], float]] = {}
+        # identity -> (node, outputs, wall seconds) of its first success, whether it was the
+        # stream's last for those inputs and its outputs' execution seconds
+        self._results: dict[str, tuple[int, tuple[Any, ...], float, bool, float]] = {}
         self.tree = Tree()
         self.queries: list[tuple[int, QueryResult]] = []
         self.deepest = 0.0  # largest share of a stream plan bound so far
@@ -378,8 +379,10 @@ class TreeSearch:
                 reason=None if success else "the same test failed on these inputs before",
             )
         elif earlier is not None:
-            reused_from, outputs_, wall_s = earlier
-            result = QueryResult(inst.stream, outputs_, 0.0, 0.0, reused=True)
+            reused_from, outputs_, wall_s, last, moves = earlier
+            result = QueryResult(
+                inst.stream, outputs_, 0.0, 0.0, reused=True, exhausted=last, duration_s=moves
+            )
         else:
             result = self.runtime.query(
                 inst.stream, inputs, key=(node.id, inst.stream), context=context
@@ -407,7 +410,16 @@ class TreeSearch:
         if not result.reused:  # an answer given again is no new evidence
             self.records.record(inst, result)
         if identity is not None and result.outputs is not None and reused_from is None:
-            self._results.setdefault(identity, (child.id, tuple(result.outputs), result.wall_s))
+            self._results.setdefault(
+                identity,
+                (
+                    child.id,
+                    tuple(result.outputs),
+                    result.wall_s,
+                    result.exhausted,
+                    result.execution_s,
+                ),
+            )
         if result.success:
             self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))
         if self.emitter is not None:

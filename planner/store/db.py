@@ -34,6 +34,7 @@ from sqlalchemy import (
     Integer,
     String,
     Text,
+    case,
     cast,
     create_engine,
     delete,
@@ -278,6 +279,19 @@ class QueryOutcome:
     wall_s: float
     reason: str | None
     error: str | None
+    execution_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class OutcomeSums:
+    """Stream queries of one stream and outcome, summed (``RunStore.outcome_sums``)."""
+
+    stream: str
+    success: bool
+    n: int
+    wall_s: float  # summed
+    execution_s: float  # summed over those that move
+    moved: int  # how many moved (execution seconds > 0)
 
 
 @dataclass(frozen=True)
@@ -755,6 +769,7 @@ class RunStore:
             QueryRow.wall_s,
             QueryRow.reason,
             QueryRow.error,
+            QueryRow.execution_s,
         )
         out: list[QueryOutcome] = []
         with self.engine.connect() as conn:
@@ -762,6 +777,54 @@ class RunStore:
                 chunk = run_ids[i : i + 500]
                 query = select(*columns).where(QueryRow.run_id.in_(chunk)).order_by(QueryRow.id)
                 out.extend(QueryOutcome(*row) for row in conn.execute(query))
+        return out
+
+    def outcome_sums(
+        self, run_ids: list[str], *, leave_out: Collection[str] = ()
+    ) -> list[OutcomeSums]:
+        """Per stream and outcome, over the stream queries of some runs: how many, their wall
+        seconds, and the execution seconds of those that move (and how many did), summed in
+        the database (a store of a benchmark holds tens of thousands). Failures whose reason
+        is in ``leave_out`` are left out."""
+        moving = case((QueryRow.execution_s > 0, 1), else_=0)
+        columns = (
+            QueryRow.stream,
+            QueryRow.success,
+            func.count(),
+            func.sum(QueryRow.wall_s),
+            func.sum(case((QueryRow.execution_s > 0, QueryRow.execution_s), else_=0.0)),
+            func.sum(moving),
+        )
+        sums: dict[tuple[str, bool], list[float]] = {}
+        with self.engine.connect() as conn:
+            for i in range(0, len(run_ids), 500):  # SQLite caps a statement's parameters
+                query = select(*columns).where(QueryRow.run_id.in_(run_ids[i : i + 500]))
+                if leave_out:
+                    kept = QueryRow.success | QueryRow.reason.is_(None)
+                    query = query.where(kept | QueryRow.reason.not_in(list(leave_out)))
+                query = query.group_by(QueryRow.stream, QueryRow.success)
+                for stream, success, n, wall, moved, n_moved in conn.execute(query):
+                    acc = sums.setdefault((stream, bool(success)), [0, 0.0, 0.0, 0])
+                    acc[0] += int(n)
+                    acc[1] += float(wall or 0.0)
+                    acc[2] += float(moved or 0.0)
+                    acc[3] += int(n_moved or 0)
+        return [
+            OutcomeSums(stream, success, int(n), wall, moved, int(n_moved))
+            for (stream, success), (n, wall, moved, n_moved) in sorted(sums.items())
+        ]
+
+    def query_runs(self) -> dict[str, tuple[str, str | None]]:
+        """Per run that has stream queries: its scene and the domain its config names (None:
+        its scene file says), for telling the runs of one domain apart without reading their
+        queries."""
+        has_queries = select(QueryRow.run_id).distinct()
+        query = select(RunRow.id, RunRow.scene, RunRow.config).where(RunRow.id.in_(has_queries))
+        out: dict[str, tuple[str, str | None]] = {}
+        with self.engine.connect() as conn:
+            for run_id, scene, config in conn.execute(query):
+                domain = json.loads(config).get("domain")
+                out[run_id] = (scene, domain if isinstance(domain, str) else None)
         return out
 
     def event_times(self, run_ids: list[str], type_: str) -> dict[str, float]:

@@ -2,6 +2,7 @@
 
 from planner.streams.adapters import (
     Failure,
+    Last,
     StreamAdapter,
     StreamContext,
     from_fn,
@@ -22,6 +23,7 @@ __all__ = [
     "BoundStream",
     "Failure",
     "FunctionValueError",
+    "Last",
     "QueryResult",
     "StreamAdapter",
     "StreamBindingError",

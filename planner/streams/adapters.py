@@ -45,6 +45,15 @@ class Failure:
 
 
 @dataclass(frozen=True)
+class Last:
+    """A sampler's output that is its last for these inputs (a PDDLStream function's one
+    output, the last item of a list): a success after which the tree search does not ask the
+    same node again, so no query is spent only to hear that the stream has nothing more."""
+
+    outputs: tuple[Any, ...]
+
+
+@dataclass(frozen=True)
 class StreamContext:
     """What holds when a stream's outputs are first needed: the symbolic state of the plan at
     that step and the values bound so far. Samplers that take ``context`` see the world as it
@@ -65,8 +74,46 @@ class StreamContext:
         return [(a.predicate, *(self.values.get(x, x) for x in a.args)) for a in facts]
 
 
+def value_key(value: Any) -> Hashable:
+    """A hashable stand-in for a value, equal for equal values: what an adapter's memory of
+    input bindings is keyed on when the caller gives no key. A numpy array is keyed on its
+    dtype, shape and bytes, a list or tuple on its items, a dict on its items; any other
+    unhashable value on its identity."""
+    if isinstance(value, str | int | float | bool | type(None)):
+        return value
+    if isinstance(value, tuple | list):
+        return (type(value).__name__, tuple(value_key(v) for v in value))
+    if isinstance(value, dict):
+        return ("dict", tuple((value_key(k), value_key(v)) for k, v in value.items()))
+    tobytes = getattr(value, "tobytes", None)
+    if callable(tobytes) and hasattr(value, "dtype") and hasattr(value, "shape"):
+        return ("ndarray", str(value.dtype), tuple(value.shape), tobytes())
+    try:
+        hash(value)
+    except TypeError:
+        return ("id", id(value))
+    hashable: Hashable = value
+    return hashable
+
+
 TEST_ANSWERED = "the test answered for these inputs, and its answer does not change"
 TEST_FALSE = "the test says false (and will again for these inputs)"
+GENERATOR_ENDED = "the generator is exhausted"
+GENERATOR_ENDED_BEFORE = "the generator ended before (asked again)"
+# PDDLStream's functions and lists (planner.streams.pddlstream), here so that what restates an
+# adapter's contract is known in one place.
+ONCE = "from_fn gives one output for these inputs, and it was given"
+ALL_GIVEN = "from_list_fn's list for these inputs is used up"
+# Answers no sampler gave: the adapter restating its contract (a function's one output already
+# given, a list used up, a test or a generator asked again). They say nothing of the sampler,
+# so training leaves them out (planner.learning.train) and so do the priors.
+RESTATING = frozenset({TEST_ANSWERED, GENERATOR_ENDED_BEFORE, ONCE, ALL_GIVEN})
+
+
+def restates_contract(reason: str | None) -> bool:
+    """Whether a failed query's reason only restates its adapter's contract (:data:`RESTATING`):
+    no sampler ran to give it."""
+    return reason in RESTATING
 
 
 @dataclass
@@ -85,6 +132,7 @@ class StreamAdapter:
     # second query of the same input binding, and a false answer, are exhausted failures.
     once: bool = False
     _generators: dict[Hashable, Iterator[Any]] = field(default_factory=dict, repr=False)
+    _ended: set[Hashable] = field(default_factory=set, repr=False)  # generators that ended
 
     def __post_init__(self) -> None:
         if self.lower_bound < 0:
@@ -118,9 +166,10 @@ class StreamAdapter:
         key: Hashable,
         context: StreamContext | None = None,
         fluents: list[FluentFact] | None = None,
-    ) -> Outputs | Failure | None:
-        """One query: the outputs, or ``None`` / a :class:`Failure` for a failure. May raise
-        (the runtime records it). ``fluents`` goes to a sampler that declares ``:fluents``."""
+    ) -> Outputs | Last | Failure | None:
+        """One query: the outputs (:class:`Last` when nothing more will come for these
+        inputs), or ``None`` / a :class:`Failure` for a failure. May raise (the runtime records
+        it). ``fluents`` goes to a sampler that declares ``:fluents``."""
         if self.kind == "function":
             raise TypeError("a function is evaluated, not queried")
         if self.kind == "test":
@@ -132,11 +181,13 @@ class StreamAdapter:
             if isinstance(verdict, Failure):
                 return verdict
             if bool(verdict):
-                return ()
+                return Last(()) if self.once else ()
             return Failure(TEST_FALSE, exhausted=True) if self.once else None
         if self.kind == "fn":
             out = self._call(inputs, context, fluents)
             return out if out is None or isinstance(out, Failure) else tuple(out)
+        if key in self._ended:
+            return Failure(GENERATOR_ENDED_BEFORE, exhausted=True)
         gen = self._generators.get(key)
         if gen is None:
             gen = iter(self._call(inputs, context, fluents))
@@ -144,8 +195,12 @@ class StreamAdapter:
         try:
             out = next(gen)
         except StopIteration:
-            return Failure("the generator is exhausted", exhausted=True)
-        return out if out is None or isinstance(out, Failure) else tuple(out)
+            self._ended.add(key)
+            del self._generators[key]
+            return Failure(GENERATOR_ENDED, exhausted=True)
+        if out is None or isinstance(out, Failure | Last):
+            return out
+        return tuple(out)
 
     @property
     def callable_name(self) -> str:

@@ -38,8 +38,22 @@ import logging
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
-from planner.pddl.structs import Atom, Domain, FunctionTerm, Literal, Problem, TypedName
-from planner.streams.adapters import Failure, StreamAdapter
+from planner.pddl.structs import (
+    And,
+    Atom,
+    Domain,
+    Exists,
+    ForAll,
+    Formula,
+    FunctionTerm,
+    Imply,
+    Literal,
+    Not,
+    Or,
+    Problem,
+    TypedName,
+)
+from planner.streams.adapters import ALL_GIVEN, ONCE, Failure, Last, StreamAdapter
 
 log = logging.getLogger(__name__)
 
@@ -58,8 +72,6 @@ __all__ = [
     "problem_from_init",
 ]
 
-ONCE = "from_fn gives one output for these inputs, and it was given"
-ALL_GIVEN = "from_list_fn's list for these inputs is used up"
 NONE_FOUND = "from_fn found no output for these inputs (and will not)"
 EMPTY_LIST = "from_list_fn's list for these inputs is empty"
 
@@ -96,9 +108,9 @@ def from_fn(fn: Callable[..., Sequence[Any] | None]) -> StreamAdapter:
     """``fn(*inputs)`` returns the output tuple (or ``None``): one output per input binding,
     as PDDLStream's functions; a second query of the same binding finds nothing new."""
 
-    def once(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Failure | None]:
+    def once(*inputs: Any, **kwargs: Any) -> Iterator[Last | Failure]:
         out = fn(*inputs, **kwargs)
-        yield Failure(NONE_FOUND, exhausted=True) if out is None else out
+        yield Failure(NONE_FOUND, exhausted=True) if out is None else Last(tuple(out))
         while True:
             yield Failure(ONCE, exhausted=True)
 
@@ -110,11 +122,13 @@ def from_list_fn(list_fn: Callable[..., Sequence[Sequence[Any]] | None]) -> Stre
     """``list_fn(*inputs)`` returns a list of output tuples, once per input binding; each
     query takes the next one."""
 
-    def each(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Failure | None]:
-        outputs = list_fn(*inputs, **kwargs) or []
+    def each(*inputs: Any, **kwargs: Any) -> Iterator[Sequence[Any] | Last | Failure]:
+        outputs = list(list_fn(*inputs, **kwargs) or [])
         if not outputs:
             yield Failure(EMPTY_LIST, exhausted=True)
-        yield from outputs
+        yield from outputs[:-1]
+        if outputs:
+            yield Last(tuple(outputs[-1]))
         while True:
             yield Failure(ALL_GIVEN, exhausted=True)
 
@@ -227,39 +241,91 @@ def _fact(entry: Any, where: str) -> tuple[str, tuple[Any, ...]]:
     return entry[0].lower(), tuple(entry[1:])
 
 
-def _goal(goal: Any, objects: _Objects, domain: Domain, where: str) -> list[Literal]:
-    """A goal conjunction: a fact, ``('and', fact, ...)`` or ``('not', fact)`` parts."""
+_CONNECTIVES = ("and", "or", "not", "imply", "exists", "forall")
+
+
+def _variables(spec: Any, where: str) -> tuple[TypedName, ...]:
+    """A quantifier's variables: ``['?p', '?q']`` (or one ``'?p'``)."""
+    names = [spec] if isinstance(spec, str) else spec
+    if not isinstance(names, list | tuple) or not names:
+        raise PDDLStreamProblemError(f"{where}: expected a list of variables such as ['?p']")
+    out = []
+    for name in names:
+        if not isinstance(name, str) or not name.startswith("?") or len(name) < 2:
+            raise PDDLStreamProblemError(f"{where}: expected a variable such as '?p', got {name!r}")
+        out.append(TypedName(name.lower()))
+    return tuple(out)
+
+
+def _formula(
+    goal: Any, objects: _Objects, domain: Domain, where: str, scope: frozenset[str]
+) -> Formula:
+    """A goal formula from PDDLStream's tuples: a fact, ``('and' | 'or', part, ...)``,
+    ``('not', part)``, ``('imply', condition, consequence)``, ``('exists' | 'forall',
+    ['?x', ...], body)``; in a quantifier's body its variables are written ``'?x'``."""
     predicate, args = _fact(goal, where)
-    if predicate == "and":
-        out: list[Literal] = []
-        for i, part in enumerate(args):
-            out += _goal(part, objects, domain, f"{where}[{i + 1}]")
-        return out
+    if predicate in ("and", "or"):
+        parts = tuple(
+            _formula(part, objects, domain, f"{where}[{i + 1}]", scope)
+            for i, part in enumerate(args)
+        )
+        return And(parts) if predicate == "and" else Or(parts)
     if predicate == "not":
         if len(args) != 1:
-            raise PDDLStreamProblemError(f"{where}: expected ('not', fact)")
-        inner = _goal(args[0], objects, domain, f"{where}[1]")
-        if len(inner) != 1 or not inner[0].positive:
-            raise PDDLStreamProblemError(f"{where}: ('not', ...) takes one fact")
-        return [Literal(inner[0].atom, False)]
-    if predicate in ("or", "exists", "forall", "imply"):
-        raise PDDLStreamProblemError(
-            f"{where}: ({predicate} ...) goals are not read from Python; write the goal as a "
-            "conjunction of facts, or give the problem as a PDDL file"
+            raise PDDLStreamProblemError(f"{where}: expected ('not', part)")
+        inner = _formula(args[0], objects, domain, f"{where}[1]", scope)
+        return Literal(inner.atom, not inner.positive) if isinstance(inner, Literal) else Not(inner)
+    if predicate == "imply":
+        if len(args) != 2:
+            raise PDDLStreamProblemError(f"{where}: expected ('imply', condition, consequence)")
+        return Imply(
+            _formula(args[0], objects, domain, f"{where}[1]", scope),
+            _formula(args[1], objects, domain, f"{where}[2]", scope),
         )
-    return [Literal(_atom(predicate, args, objects, domain, where))]
+    if predicate in ("exists", "forall"):
+        if len(args) != 2:
+            raise PDDLStreamProblemError(f"{where}: expected ('{predicate}', ['?x', ...], body)")
+        variables = _variables(args[0], f"{where}[1]")
+        inner_scope = scope | {v.name for v in variables}
+        body = _formula(args[1], objects, domain, f"{where}[2]", inner_scope)
+        return Exists(variables, body) if predicate == "exists" else ForAll(variables, body)
+    return Literal(_atom(predicate, args, objects, domain, where, scope))
+
+
+def _goal(goal: Any, objects: _Objects, domain: Domain, where: str) -> list[Formula]:
+    """The goal's conjuncts (a top-level ``and`` is split)."""
+    formula = _formula(goal, objects, domain, where, frozenset())
+    return list(formula.parts) if isinstance(formula, And) else [formula]
 
 
 def _atom(
-    predicate: str, args: tuple[Any, ...], objects: _Objects, domain: Domain, where: str
+    predicate: str,
+    args: tuple[Any, ...],
+    objects: _Objects,
+    domain: Domain,
+    where: str,
+    scope: frozenset[str] = frozenset(),
 ) -> Atom:
+    if predicate in _CONNECTIVES:
+        raise PDDLStreamProblemError(f"{where}: ({predicate} ...) belongs in the goal, not init")
     known = {p.name: p.arity for p in domain.predicates}
     if predicate in known and known[predicate] != len(args):
         raise PDDLStreamProblemError(
             f"{where}: predicate {predicate!r} takes {known[predicate]} arguments, "
             f"{len(args)} given ({domain.places.get(predicate, domain.source)})"
         )
-    return Atom(predicate, tuple(objects.name(a) for a in args))
+    names = []
+    for a in args:
+        if isinstance(a, str) and a.startswith("?"):
+            if a.lower() not in scope:
+                raise PDDLStreamProblemError(
+                    f"{where}: variable {a} is not quantified (an ('exists', ['{a}'], ...) "
+                    "or ('forall', ...) around it binds it)"
+                )
+            names.append(a.lower())
+        else:
+            names.append(objects.name(a))
+    return Atom(predicate, tuple(names))
 
 
 def problem_from_init(
@@ -275,24 +341,27 @@ def problem_from_init(
     """A :class:`~planner.pddl.Problem` from PDDLStream's ``init`` and ``goal``: facts as tuples
     whose first item is the predicate (any case) and whose arguments are Python values
     (strings are object names, any other value becomes an object ``v0``, ``v1``, ... with that
-    value); ``('=', ('Dist', a, b), 3.5)`` gives a function its value; the goal is a fact or
-    ``('and', fact, ...)`` with ``('not', fact)`` parts. ``constant_map`` maps the domain's
+    value); ``('=', ('Dist', a, b), 3.5)`` gives a function its value; the goal is a fact or a
+    formula of PDDLStream's tuples: ``('and' | 'or', part, ...)``, ``('not', part)``,
+    ``('imply', a, b)``, ``('exists' | 'forall', ['?x', ...], body)``. Errors name ``source``
+    (the scene file) and the entry (``init[3]``, ``goal[2]``). ``constant_map`` maps the domain's
     constants to their values (PDDLStream's ``constant_map``); ``values`` adds values that no
     fact names (a scene's geometry for the samplers). Predicates the domain does not declare
     are declared by their use, as everywhere (planner.pddl.structs.problem_predicates)."""
+    prefix = "" if source == "<python>" else f"{source}: "  # errors name the file
     constants = {c.name for c in domain.constants}
     objects = _Objects(constants)
     for const, value in (constant_map or {}).items():
         if const.lower() not in constants:
             raise PDDLStreamProblemError(
-                f"constant_map: {const!r} is not a constant of domain {domain.name}"
+                f"{prefix}constant_map: {const!r} is not a constant of domain {domain.name}"
             )
         objects.values[const.lower()] = value
         objects._by_id[id(value)] = const.lower()
     facts: set[Atom] = set()
     numbers: dict[FunctionTerm, float] = {}
     for i, entry in enumerate(init):
-        where = f"init[{i}]"
+        where = f"{prefix}init[{i}]"
         predicate, args = _fact(entry, where)
         if predicate == "=":
             if len(args) != 2:
@@ -308,16 +377,20 @@ def problem_from_init(
             numbers[FunctionTerm(fname, tuple(objects.name(a) for a in fargs))] = value
             continue
         facts.add(_atom(predicate, args, objects, domain, where))
-    literals = _goal(goal, objects, domain, "goal")
+    parts = _goal(goal, objects, domain, f"{prefix}goal")
     all_values: dict[str, Any] = dict(values or {})
     all_values.update(objects.values)
-    return Problem(
-        name,
-        domain.name,
-        tuple(TypedName(n) for n in objects.names),
-        frozenset(facts),
-        tuple(literals),
-        source,
-        all_values,
-        function_values=numbers,
-    )
+    try:
+        return Problem(
+            name,
+            domain.name,
+            tuple(TypedName(n) for n in objects.names),
+            frozenset(facts),
+            tuple(p for p in parts if isinstance(p, Literal)),
+            source,
+            all_values,
+            goal_conditions=tuple(p for p in parts if not isinstance(p, Literal)),
+            function_values=numbers,
+        )
+    except ValueError as exc:
+        raise PDDLStreamProblemError(f"{prefix}{exc}") from exc

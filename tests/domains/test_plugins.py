@@ -52,10 +52,43 @@ def test_a_copied_folder_loads_by_path_and_its_scenes_name_it_relatively(tmp_pat
     assert by_name.directory == folder.resolve()
 
 
+def test_a_folder_whose_pddl_files_live_elsewhere_plans_and_validates(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``DomainSpec.directory`` names where the PDDL files are (a PDDLStream example's own
+    folder, which holds an ``__init__.py`` of its own): the folder with domain.py loads, its
+    scenes are its own, and a run and ``tamp validate`` load it again from that folder."""
+    folder = _copy(tmp_path)
+    elsewhere = tmp_path / "pddlstream" / "examples" / "tabletop"
+    elsewhere.mkdir(parents=True)
+    (elsewhere / "__init__.py").write_text("")  # as in PDDLStream's examples: no domain here
+    for name in ("domain.pddl", "stream.pddl"):
+        (folder / name).rename(elsewhere / name)
+    with (folder / "domain.py").open("a") as module:
+        module.write(
+            "\nimport dataclasses as _dc\nfrom pathlib import Path as _Path\n\n"
+            "DOMAIN = _dc.replace(DOMAIN, directory=_Path('../pddlstream/examples/tabletop'))\n"
+        )
+    loaded = load_domain(folder)
+    assert loaded.directory == elsewhere.resolve() and loaded.home == folder.resolve()
+    assert loaded.scenes_dir == folder.resolve() / "scenes"
+    out = tmp_path / "plan.json"
+    scene = str(folder / "scenes" / "tabletop-2.json")
+    args = ["plan", "--scene", scene, "--planner", "baseline", "--seed", "1", "--no-record"]
+    assert main([*args, "--out", str(out)]) == 0, capsys.readouterr().out
+    assert main(["validate", str(out)]) == 0
+    assert "valid" in capsys.readouterr().out
+    again = tmp_path / "again"
+    shutil.copytree(folder, again, ignore=shutil.ignore_patterns("__pycache__"))
+    (elsewhere / "stream.pddl").unlink()
+    with pytest.raises(DomainLoadError, match=r"tabletop \(DomainSpec\.directory\) has no"):
+        load_domain(again)
+
+
 @pytest.mark.parametrize(
     ("breakage", "says"),
     [
-        ("no-stream", r"mine: no stream\.pddl in the domain folder"),
+        ("no-stream", r"mine has no stream\.pddl"),
         ("no-module", r"mine: no domain\.py or __init__\.py"),
         ("no-object", r"domain\.py: no domain object: export DOMAIN = DomainSpec"),
         ("import-error", r"domain\.py:2: cannot import the domain module: ModuleNotFoundError"),

@@ -15,6 +15,7 @@ from planner.api import RunConfig
 from planner.domains import LoadedDomain, load_domain
 from planner.learning.features import FactFeatures, FeatureError, Featurizer
 from planner.learning.model import CostModel
+from planner.learning.priors import priors_from_records, priors_from_store
 from planner.learning.train import LoadedRecords, load_records, train
 from planner.runs import record_run
 from planner.store import RunStore
@@ -154,3 +155,13 @@ def test_learned_without_a_model_runs_on_the_stores_priors(
     warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
     assert len(warned) == 1
     assert f"priors from {len(records)} queries recorded in {db}" in warned[0]
+    # summed in the store, the priors are those of the queries one by one
+    summed, n = priors_from_store(Path(db), "tabletop2d")
+    one_by_one = priors_from_records(records)
+    assert n == len(records) and summed.keys() == one_by_one.keys()
+    for stream, prior in summed.items():
+        expected = one_by_one[stream]
+        assert (prior.p_s, prior.n) == (expected.p_s, expected.n)
+        assert [prior.r_s, prior.r_f, prior.r_m] == pytest.approx(
+            [expected.r_s, expected.r_f, expected.r_m]
+        )

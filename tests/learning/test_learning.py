@@ -3,6 +3,7 @@ rules a model can learn (no recorded database, no simulation)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -16,8 +17,10 @@ import torch
 from planner.domains import load_domain
 from planner.learning.features import FEATURE_VERSION, FeatureError, Featurizer
 from planner.learning.model import CostModel, ModelError
+from planner.learning.priors import priors_from_records
 from planner.learning.train import TrainReport, auc, format_report, split_runs, train
 from planner.store import QueryRecord
+from planner.streams.adapters import ONCE
 
 KITCHEN = load_domain("kitchen")  # these are the kitchen's own features (its feature hook)
 PLATFORMS = ("table", "sink", "stove")
@@ -336,6 +339,55 @@ def test_learns_the_synthetic_rules_and_beats_the_prior(
     assert motion.mae_r_m < 0.5 * motion.prior_mae_r_m
     assert "sample-placement" in format_report(report)
     json.dumps(report.to_dict())
+
+
+def test_answers_that_restate_the_contract_are_left_out_and_counted(
+    data: list[QueryRecord],
+) -> None:
+    """A PDDLStream function asked again answers "already given" without running its
+    sampler: no feature can predict that, so such rows are no training rows; the report (and
+    the model file) says per stream how many rows were used and how many left out, and why."""
+    ik = [r for r in data if r.stream == "inverse-kinematics"]
+    restated = [
+        dataclasses.replace(r, id=10_000 + i, success=False, reason=ONCE)
+        for i, r in enumerate(ik[::2])
+    ]
+    model, report = train([*data, *restated], domain=KITCHEN, seed=0, epochs=5)
+    assert report.rows["inverse-kinematics"] == len(ik)
+    assert report.left_out == {"inverse-kinematics": {ONCE: len(restated)}}
+    counts = report.stream("inverse-kinematics")
+    assert counts.n_train + counts.n_val == len(ik)  # the restated rows are in neither
+    text = format_report(report)
+    assert f"inverse-kinematics: {len(ik)} used, {len(restated)} left out" in text
+    assert "only restate the adapter's contract" in text
+    assert model.metadata["left_out"] == {"inverse-kinematics": {ONCE: len(restated)}}
+    with pytest.raises(ValueError, match="only restates its adapter's contract"):
+        train(restated, domain=KITCHEN, seed=0, epochs=5)
+    priors = priors_from_records([*data, *restated])
+    alone = priors_from_records(data)
+    assert priors["inverse-kinematics"] == alone["inverse-kinematics"]
+
+
+def test_a_stream_is_trusted_where_its_validation_beat_its_prior(
+    trained: tuple[CostModel, TrainReport],
+) -> None:
+    """LearnedConfig.trust reads the model file's validation: a stream's predictions are
+    trusted where its network's held-out log loss beat the stream's average."""
+    model, report = trained
+    trusted = model.trusted_streams()
+    assert trusted is not None and "sample-placement" in trusted
+    for s in report.streams:
+        beat = (
+            not s.prior_used
+            and s.log_loss is not None
+            and s.prior_log_loss is not None
+            and s.log_loss < s.prior_log_loss
+        )
+        assert (s.stream in trusted) == beat, s
+    unvalidated = CostModel(
+        model.featurizer, model.networks, model.priors, default_prior=model.default_prior
+    )
+    assert unvalidated.trusted_streams() is None  # a file without figures: trusted throughout
 
 
 def test_predictions_are_batched_and_non_negative(

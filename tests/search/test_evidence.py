@@ -12,9 +12,11 @@ from planner.abstract import AbstractConfig, plan_abstract
 from planner.domains import problem_for_scene
 from planner.learning.priors import PriorPredictor
 from planner.search.binding import stream_contexts
+from planner.search.costs import StreamCost
 from planner.search.evidence import Evidence
 from planner.search.learned import LearnedConfig, LearnedPolicy
 from planner.search.mcts import TreeSearch
+from planner.search.tree import ROOT, Node, Tree
 
 TUTORIAL = Path(__file__).resolve().parents[2] / "examples" / "tabletop2d"
 
@@ -58,3 +60,56 @@ def test_dead_ends_found_step_by_step_are_those_of_the_whole_tree(tmp_path: Path
     whole = Evidence(policy.evidence.queries)
     whole.refresh(search.tree)
     assert whole.dead == policy.dead
+
+
+class _Told:
+    """Predictions and relevant objects given by hand: every query is predicted to succeed 90%
+    of the time; a node's next query reads what ``reads`` says."""
+
+    def __init__(self, reads: dict[int, set[str]]) -> None:
+        self.reads = reads
+
+    def first(self, node: Node) -> StreamCost | None:
+        return StreamCost(0.9, 0.01, 0.01, 0.0)
+
+    def relevant(self, node: Node) -> set[str]:
+        return set(self.reads.get(node.id, ()))
+
+    def precise(self, node: Node) -> bool:
+        return True
+
+
+def placement_that_left_no_room(tries: int) -> tuple[Tree, int, dict[int, set[str]]]:
+    """Block 1 placed at opt-p1 (node ``first``); under it, ``tries`` placements of block 2,
+    each exhausted after its collision test against opt-p1 said false (a PDDLStream test: it
+    answers once), so each is dead to the search and nothing below ``first`` lives."""
+    tree = Tree()
+    plan = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    first = tree.add(plan.id, plan_index=0, depth=1, success=True, outputs={"opt-p1": 1.0})
+    reads = {first.id: {"b2"}}
+    for i in range(tries):
+        second = tree.add(
+            first.id, plan_index=0, depth=2, success=True, outputs={"opt-p2": 1.0 + i}
+        )
+        tree.add(second.id, plan_index=0, depth=3, success=False)  # cfree(b2 opt-p2 b1 opt-p1)
+        second.exhausted = second.dead = True
+        reads[second.id] = {"b2", "opt-p2", "b1", "opt-p1"}
+    return tree, first.id, reads
+
+
+def test_an_exhausted_node_with_nothing_live_below_is_a_dead_end_and_backjumps() -> None:
+    """Each re-sampled placement of block 2 fails its test against block 1's placement: the
+    failures depend on opt-p1, so once block 2 has been re-sampled as often as the prediction
+    allows, block 1's placement is the dead end (the search goes back to re-place block 1).
+    Without exhausted_dead the exhausted placements vouch for block 1's as live successes."""
+    tree, first, reads = placement_that_left_no_room(tries=2)
+    evidence = Evidence(_Told(reads))
+    evidence.refresh(tree)
+    assert first in evidence.dead and "opt-p1" in evidence.dead[first]
+    blind = Evidence(_Told(reads), exhausted_dead=False)
+    blind.refresh(tree)
+    assert first not in blind.dead
+    tree, first, reads = placement_that_left_no_room(tries=1)  # one try is not enough
+    evidence = Evidence(_Told(reads))
+    evidence.refresh(tree)
+    assert first not in evidence.dead and len(evidence.dead) == 1

@@ -14,7 +14,8 @@ from planner.api import plan
 from planner.domains import load_domain_folder
 from planner.pddl import Atom, Literal, parse_domain, parse_streams
 from planner.pddl.parser import with_stream_declarations
-from planner.streams import Failure, StreamBindingError, bind_streams
+from planner.pddl.structs import Exists, ForAll, Imply, Or
+from planner.streams import Failure, Last, StreamBindingError, bind_streams
 from planner.streams.adapters import TEST_ANSWERED, TEST_FALSE
 from planner.streams.pddlstream import (
     ALL_GIVEN,
@@ -50,12 +51,12 @@ def test_from_fn_gives_one_output_per_input_binding() -> None:
         return (p + 1,)
 
     adapter = from_fn(ik)
-    assert answers(adapter, 3, 2.0) == [
-        (3.0,),
+    assert answers(adapter, 3, 2.0) == [  # its one output is its last: the search asks no more
+        Last((3.0,)),
         Failure(ONCE, exhausted=True),
         Failure(ONCE, exhausted=True),
     ]
-    assert answers(adapter, 1, 5.0, key="other") == [(6.0,)]
+    assert answers(adapter, 1, 5.0, key="other") == [Last((6.0,))]
     assert calls == [2.0, 5.0]
     assert answers(from_fn(lambda p: None), 2, 1.0) == [
         Failure(NONE_FOUND, exhausted=True),
@@ -84,7 +85,7 @@ def test_generators_lists_samplers_and_constants() -> None:
     assert answers(from_list_gen_fn(batches), 5, 0)[:4] == [(0,), (1,), None, (2,)]
     assert answers(from_list_fn(lambda x: [(x,), (-x,)]), 3, 4) == [
         (4,),
-        (-4,),
+        Last((-4,)),
         Failure(ALL_GIVEN, exhausted=True),
     ]
     assert answers(from_list_fn(lambda x: []), 2, 4) == [
@@ -93,16 +94,16 @@ def test_generators_lists_samplers_and_constants() -> None:
     ]
     draws = iter(range(10))
     assert answers(from_sampler(lambda x: (next(draws),)), 3, 0) == [(0,), (1,), (2,)]
-    assert answers(from_constant((7, 8)), 2, 0) == [(7, 8), Failure(ONCE, exhausted=True)]
+    assert answers(from_constant((7, 8)), 2, 0) == [Last((7, 8)), Failure(ONCE, exhausted=True)]
     assert answers(empty_gen(), 1, 0)[0] == Failure("the generator is exhausted", exhausted=True)
-    assert from_test(negate_test(lambda x: x > 2)).next_outputs((1,), "k") == ()
+    assert from_test(negate_test(lambda x: x > 2)).next_outputs((1,), "k") == Last(())
     said_no = from_test(lambda x: x > 2)
     assert said_no.next_outputs((1,), "k") == Failure(TEST_FALSE, exhausted=True)
     # PDDLStream's tests answer once per input binding: asking again is exhausted at once
     said_yes = from_test(lambda x: x > 2)
-    assert said_yes.next_outputs((3,), "k") == ()
+    assert said_yes.next_outputs((3,), "k") == Last(())
     assert said_yes.next_outputs((3,), "k") == Failure(TEST_ANSWERED, exhausted=True)
-    assert said_yes.next_outputs((3,), "other") == ()
+    assert said_yes.next_outputs((3,), "other") == Last(())
     assert fn_from_constant(2.5)("anything") == 2.5
 
 
@@ -136,6 +137,13 @@ def test_a_stream_map_binds_plain_functions_and_ignores_case() -> None:
     assert runtime.query("sample-link", (1,)).outputs == (2,)
     with pytest.raises(StreamBindingError, match="'sample-link' is bound to a plain function"):
         bind_streams(streams, {"sample-link": lambda a: (a,), "closed": bool, "dist": max})
+    # an entry the stream file never declares (a helper kept in the map) is left out, as
+    # PDDLStream does, with a warning that names it; a strict domain refuses it
+    helper = {"sample-link": from_fn(lambda a: (a,)), "closed": bool, "dist": max}
+    helper["collision"] = lambda p, q: p == q
+    assert "collision" not in bind_streams(streams, helper).names
+    with pytest.raises(StreamBindingError, match=r"'collision'.*declares no such stream"):
+        bind_streams(streams, helper, strict=True)
     with pytest.raises(StreamBindingError, match="two bindings for stream 'closed'"):
         bind_streams(streams, {"closed": bool, "CLOSED": bool})
 
@@ -163,10 +171,39 @@ def test_problem_from_pddlstream_init_and_goal() -> None:
         problem_from_init(domain, [("Place", "a"), ("Place", "a", "b")], ("at", "a"))
     with pytest.raises(PDDLStreamProblemError, match=r"init\[0\]: expected a fact such as"):
         problem_from_init(domain, ["Place"], ("at", "a"))
-    with pytest.raises(PDDLStreamProblemError, match=r"goal: \(or ...\) goals are not read"):
-        problem_from_init(domain, [("Place", "a")], ("or", ("at", "a"), ("at", "b")))
+    with pytest.raises(
+        PDDLStreamProblemError, match=r"scene\.json: goal: variable \?q is not quantified"
+    ):
+        problem_from_init(domain, [("Place", "a")], ("at", "?q"), source="scene.json")
     with pytest.raises(PDDLStreamProblemError, match="'a' and 'A' are one name"):
         problem_from_init(domain, [("Place", "a"), ("Place", "A")], ("at", "a"))
+
+
+def test_goals_built_from_python_take_the_whole_language() -> None:
+    """PDDLStream's goals are tuples built in Python: ``or``, ``not`` over a compound,
+    ``imply`` and quantifiers over ``'?x'`` variables become the goal's formulas; the
+    literal conjuncts stay literals."""
+    domain = with_stream_declarations(
+        parse_domain(DOMAIN), parse_streams(STREAMS, parse_domain(DOMAIN))
+    )
+    pose = (1.0, 2.0)
+    problem = problem_from_init(
+        domain,
+        [("Place", "Home"), ("Place", pose), ("at", "Home")],
+        (
+            "and",
+            ("not", ("at", "Home")),
+            ("or", ("at", pose), ("exists", ["?q"], ("and", ("Place", "?q"), ("at", "?q")))),
+            ("forall", ["?q"], ("imply", ("at", "?q"), ("Place", "?q"))),
+        ),
+    )
+    assert problem.goal == (Literal(Atom("at", ("home",)), positive=False),)
+    either, every = problem.goal_conditions
+    assert isinstance(either, Or) and isinstance(either.parts[1], Exists)
+    assert str(either) == "(or (at v0) (exists (?q - object) (and (place ?q) (at ?q))))"
+    assert isinstance(every, ForAll) and isinstance(every.body, Imply)
+    with pytest.raises(PDDLStreamProblemError, match=r"goal\[1\]: expected a variable"):
+        problem_from_init(domain, [("at", "Home")], ("exists", ["q"], ("at", "?q")))
 
 
 @pytest.mark.slow

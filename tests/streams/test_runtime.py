@@ -26,14 +26,20 @@ def test_missing_binding_names_stream_and_file(line: LoadedDomain) -> None:
     assert "stream.pddl" in str(info.value) and "'test-reachable'" in str(info.value)
 
 
-def test_binding_for_undeclared_stream_is_refused(line: LoadedDomain) -> None:
+def test_binding_for_undeclared_stream_is_left_out_or_refused_when_strict(
+    line: LoadedDomain, caplog: pytest.LogCaptureFixture
+) -> None:
     bindings = {
         "sample-pose": from_fn(lambda b, r: (0.0,)),
         "test-reachable": from_test(lambda b, p: True),
         "sample-grasp": from_fn(lambda b: (1,)),
     }
+    with caplog.at_level("WARNING"):
+        runtime = bind_streams(line.streams, bindings)
+    assert "sample-grasp" not in runtime.names
+    assert "'sample-grasp' is left out" in caplog.text and "stream.pddl" in caplog.text
     with pytest.raises(StreamBindingError, match=r"'sample-grasp'.*declares no such stream"):
-        bind_streams(line.streams, bindings)
+        bind_streams(line.streams, bindings, strict=True)
 
 
 def test_test_adapter_on_stream_with_outputs_is_refused(line: LoadedDomain) -> None:

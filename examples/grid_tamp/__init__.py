@@ -1,0 +1,1 @@
+"""The grid TAMP after PDDLStream's discrete_tamp example (docs/domains.md)."""
