@@ -132,7 +132,7 @@ def test_without_execution_seconds_the_plan_says_why_they_are_zero(grid: LoadedD
 def test_learned_with_priors_only_searches_as_the_baseline(grid: LoadedDomain) -> None:
     """On a domain it has never seen (no model, no recorded queries) no estimate is trusted
     (LearnedConfig.trust), so the learned search makes the baseline's queries; with the rule
-    off it trusts averages and goes down the shortest stream plans first."""
+    off it trusts averages and searches otherwise (the rule is what makes them the same)."""
 
     def queries(planner: str, **kw: Any) -> list[tuple[str, bool]]:
         result = plan(
@@ -143,7 +143,7 @@ def test_learned_with_priors_only_searches_as_the_baseline(grid: LoadedDomain) -
 
     baseline = queries("baseline")
     assert queries("learned", model="priors") == baseline
-    assert len(queries("learned:trust=off", model="priors")) > len(baseline)
+    assert queries("learned:trust=off", model="priors") != baseline
 
 
 def test_scene_errors_name_the_file_and_the_field(grid: LoadedDomain, tmp_path: Path) -> None:

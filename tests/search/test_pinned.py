@@ -13,7 +13,8 @@ the visual meshes); the kitchen's learned trial was recorded again when the lear
 lost two of its parts, which made it another trial. The Panda's trials (baseline, and learned
 with its shipped model) were recorded when the domain came in; both learned trials were recorded
 again when the learned planner came to choose stream plans by their estimate
-(``plans_by_estimate``).
+(``plans_by_estimate``); the Panda's learned trial again when skeletons came on demand from the
+adaptive source and the learned search came to trust only validated streams (issues 52, 53).
 
 To record a trial afresh after a change that is meant to change it:
 ``python -m tests.search.test_pinned SCENE SEED PLANNER``.
