@@ -237,6 +237,7 @@ def trial_order(config: BenchConfig) -> list[Trial]:
         planners = config.planners if i % 2 == 0 else tuple(reversed(config.planners))
         for planner in planners:
             model = config.model if config.uses_model(planner) else None
+            model = get_planner(planner).model or model  # "learned:model=priors"
             out.append(
                 Trial(
                     config.scene, seed, planner, config.budget_s, model, config.order, config.domain

@@ -89,6 +89,11 @@ class PlannerConfig(Protocol):
         ...
 
     @property
+    def planner(self) -> str:
+        """The planner spec (:func:`get_planner`), which may set ``model=priors``."""
+        ...
+
+    @property
     def priors_db(self) -> str | None:
         """The store whose recorded queries give the priors when there is no model."""
         ...
@@ -192,8 +197,10 @@ class Planner(ABC):
 
 def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
     """The cost model of a run: ``config.model``, else the domain's shipped model, else per-stream
-    priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning."""
-    path = loaded.spec.model if config.model is None else config.model
+    priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning.
+    A planner spec's ``model=priors`` (``config.planner``) takes priors whatever the run names."""
+    chosen = get_planner(config.planner).model or config.model
+    path = loaded.spec.model if chosen is None else chosen
     if path is not None and path != PRIORS:
         from planner.learning.predictor import ModelPredictor
 
@@ -206,7 +213,7 @@ def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
         priors, queries = priors_from_store(Path(config.priors_db), loaded.name)
         if queries:
             source = f"priors from {queries} queries recorded in {config.priors_db}"
-    if config.model == PRIORS:
+    if chosen == PRIORS:
         log.info("model %r: the learned search runs on per-stream priors (%s)", PRIORS, source)
     else:
         log.warning(
@@ -696,6 +703,9 @@ class PlannerSpec:
     kind: type[Planner]
     parts: LearnedConfig | None = None  # the learned planners' configuration
     skeletons: str | None = None  # "skeletons=kstar": the run's skeleton source, any planner
+    # "model=priors": a learned planner on per-stream priors whatever model the run names, so
+    # one paired benchmark can hold the learned search with its model and without
+    model: str | None = None
 
     @property
     def uses_model(self) -> bool:
@@ -733,10 +743,18 @@ def get_planner(spec: str) -> PlannerSpec:
         raise ValueError(f"unknown planner {name!r} (known: {', '.join(PLANNERS)})")
     kind, make = _NAMED[name]
     skeletons: str | None = None
+    model: str | None = None
     rest = []
     for item in (t for t in settings.split(":") if t):
         key, _, value = item.partition("=")
-        if key != "skeletons":
+        if key == "model":
+            if value != PRIORS or make is None:
+                raise ValueError(
+                    f"planner setting {item!r}: only paper and learned take model={PRIORS} "
+                    "(a model file is given with --model)"
+                )
+            model = value
+        elif key != "skeletons":
             rest.append(item)
         elif value not in SKELETON_SOURCES:
             known = ", ".join(SKELETON_SOURCES)
@@ -750,4 +768,4 @@ def get_planner(spec: str) -> PlannerSpec:
                 "planner takes skeletons=SOURCE)"
             )
         return PlannerSpec(spec, kind, skeletons=skeletons)
-    return PlannerSpec(spec, kind, make().with_settings(":".join(rest)), skeletons)
+    return PlannerSpec(spec, kind, make().with_settings(":".join(rest)), skeletons, model)

@@ -23,6 +23,7 @@ from planner.cli import main
 from planner.domains import load_domain
 from planner.domains.kitchen import MODEL as DEFAULT_MODEL
 from planner.learning.model import CostModel
+from planner.planners import get_planner
 from planner.report import failure_kind, query_summary, render_html, summarize, table_markdown
 from planner.store import BenchTrialRecord, QueryOutcome, RunStore
 from tests.postgres import PostgresServer
@@ -104,6 +105,28 @@ def test_model_priors_runs_learned_on_the_stores_priors_though_the_domain_ships_
     assert check(config) == {"model": "priors", "training_seeds": None}
     assert {t.model for t in trial_order(config) if t.planner == "learned"} == {"priors"}
     assert locate_model(config, None) == config
+
+
+def test_one_benchmark_holds_learned_with_its_model_and_on_priors() -> None:
+    """``learned:model=priors`` runs on the store's priors beside ``learned`` with the model, in
+    one paired benchmark; only the learned planners take the setting."""
+    config = make_config(
+        "kitchen-4",
+        ["baseline", "learned", "learned:model=priors"],
+        trials=1,
+        seed_start=1000,
+        budget_s=10,
+    )
+    models = {t.planner: t.model for t in trial_order(config)}
+    assert models == {
+        "baseline": None,
+        "learned": str(DEFAULT_MODEL),
+        "learned:model=priors": "priors",
+    }
+    with pytest.raises(ValueError, match="only paper and learned take model=priors"):
+        get_planner("baseline:model=priors")
+    with pytest.raises(ValueError, match="only paper and learned take model=priors"):
+        get_planner("learned:model=other.pt")
 
 
 def test_a_model_order_gives_every_tree_search_the_model_and_is_kept_for_resume() -> None:
