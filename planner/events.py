@@ -221,8 +221,9 @@ class StreamQueried(_EventBase):
     # domain's static context (the kitchen: {"geometry": {"platforms": ..., "blocks": ...}}).
     context: dict[str, Any] = field(default_factory=dict)
     # The node whose identical query gave this answer: no sampler ran, so the store keeps no
-    # training row for it. A success with the same stream, inputs and context, or a test asked
-    # with the same inputs (its answer, failure too, is a function of them). None: a real query.
+    # training row for it. A success with the same stream, inputs and context, a test asked
+    # with the same inputs (its answer, failure too, is a function of them), or a known failure
+    # (the stream found nothing for these inputs and said it will not). None: a real query.
     reused_from: int | None = None
     # Why a sampler that ran cleanly found nothing, when it said (the kitchen's: "base motion:
     # no path in 150 iterations", "no IK solution ..."); None for a success or an error.

@@ -247,6 +247,17 @@ class LearnedConfig:
 
     Measured (off against on, paired, docs/BENCHMARKS.md): not measured yet."""
 
+    known_failures: bool = True
+    """A node whose next query the search answered as a known failure (the same stream and
+    inputs found nothing before and said it will not: ``Node.known_failure``) is predicted to
+    fail (``P_S`` 0), so the node above does not count its death against its own query: a
+    list of grasps that starts again at the two that never reach is asked on to the third.
+    Off: the model's prediction stands (a sure IK made each such death look like bad luck of
+    the node above, which was backjumped from after two, and every fresh branch began with the
+    same two grasps).
+
+    Measured: docs/BENCHMARKS.md, *Published PDDLStream examples*."""
+
     @classmethod
     def paper(cls) -> LearnedConfig:
         """The paper's planner: every addition off (exhaustion, the streams' contract, stays)."""
@@ -296,7 +307,12 @@ class _Queries:
 
     def first(self, node: Node) -> StreamCost | None:
         entries = self.policy._entries.get(node.id)
-        return entries[0] if entries else None
+        if not entries:
+            return None
+        first = entries[0]
+        if node.known_failure and self.policy.config.known_failures:
+            return StreamCost(0.0, first.r_s, first.r_f, first.r_m)  # LearnedConfig
+        return first
 
     def relevant(self, node: Node) -> set[str]:
         return self.policy._relevant(node)

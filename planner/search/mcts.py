@@ -250,6 +250,7 @@ class TreeSearch:
         fluent_streams: frozenset[str] = frozenset(),
         memo_tests: bool = True,
         doubt_after: int = 8,
+        memo_exhausted: bool = True,
     ) -> None:
         if not skeletons:
             raise ValueError("the search needs at least one stream plan")
@@ -285,6 +286,20 @@ class TreeSearch:
         self.fluent_streams = fluent_streams  # streams whose samplers read the state
         # identity -> (success, the node of the first answer, whether the stream said exhausted)
         self._tests: dict[str, tuple[bool, int, bool]] = {}
+        # Known failures: a stream that found nothing for some inputs and said it will not
+        # (Failure.exhausted: a PDDLStream function that gave no output, a hand blocked both
+        # ways round) is not asked those inputs again: with memo_exhausted the failure comes back
+        # without a query and the querying node is marked (Node.known_failure), so a learned
+        # policy predicts it as the failure it is. The key is the stream and its inputs, with
+        # the declared fluents of a stream that has them, and the whole recorded context of
+        # one whose sampler reads the state (bound with context). Why: a list of grasps starts
+        # again at its first under every new node, and a model sure of that grasp's IK made
+        # each fresh branch look as good as the last (pick_place_2d: 3,735 IK queries on two
+        # grasps that never reach, in one timed-out run).
+        self.memo_exhausted = memo_exhausted
+        reads = getattr(runtime, "state_reads", None)
+        self._reads_inputs: frozenset[str] = frozenset(reads() if callable(reads) else ())
+        self._known: dict[str, int] = {}  # key -> the node of the first failure
         # Feedback: per stream instance of the optimistic task, its queries and successes; an
         # instance asked doubt_after times with no success is doubted (0: never).
         self.records = InstanceRecords(
@@ -367,7 +382,21 @@ class TreeSearch:
         wall_s = 0.0  # what the node's binding cost, for the oracle: the original's seconds
         test_key = self._test_key(inst, inputs, context)
         answered = self._tests.get(test_key) if test_key is not None else None
-        if answered is not None:
+        known_key = self._known_key(inst, inputs, context)
+        known = self._known.get(known_key) if known_key is not None else None
+        if known is not None:
+            reused_from = known
+            node.known_failure = True
+            result = QueryResult(
+                inst.stream,
+                None,
+                0.0,
+                0.0,
+                reused=True,
+                exhausted=True,
+                reason="the stream found nothing for these inputs before (and said it will not)",
+            )
+        elif answered is not None:
             success, reused_from, exhausted = answered
             result = QueryResult(
                 inst.stream,
@@ -407,6 +436,14 @@ class TreeSearch:
             node.exhausted = True
         if test_key is not None and answered is None and result.error is None:
             self._tests[test_key] = (result.success, child.id, result.exhausted)
+        if (
+            known_key is not None
+            and known is None
+            and not result.success
+            and result.exhausted
+            and result.error is None
+        ):
+            self._known.setdefault(known_key, child.id)
         if not result.reused:  # an answer given again is no new evidence
             self.records.record(inst, result)
         if identity is not None and result.outputs is not None and reused_from is None:
@@ -453,6 +490,18 @@ class TreeSearch:
         if inst.stream in self.fluent_streams:
             return self._identity(inst.stream, inputs, context)
         return query_identity(inst.stream, [self.encode(v) for v in inputs], {})
+
+    def _known_key(
+        self, inst: StreamInstance, inputs: tuple[Any, ...], context: StreamContext
+    ) -> str | None:
+        """The key of a stream query among the known failures (None: not remembered): its
+        stream and encoded inputs, with its declared fluents' context, or with the whole
+        recorded context when its sampler reads the state."""
+        if not self.memo_exhausted or not inst.outputs or inst.kind != "stream":
+            return None
+        if inst.stream in self._reads_inputs and inst.stream not in self.fluent_streams:
+            return query_identity(inst.stream, [self.encode(v) for v in inputs], {})
+        return self._identity(inst.stream, inputs, context)
 
     def feedback(self) -> Feedback:
         """What the queries so far proved about the optimistic task

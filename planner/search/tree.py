@@ -30,6 +30,8 @@ class Node:
     exhausted: bool = False
     # Exhausted and nothing live below it: the search never comes here again.
     dead: bool = False
+    # Its next query was a known failure (TreeSearch.memo_exhausted): answered without a query.
+    known_failure: bool = False
 
 
 @dataclass

@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import json
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -86,6 +87,38 @@ def test_a_block_in_the_way_is_moved_first(planner: str) -> None:
     assert picked.index("b") < picked.index("a"), result.actions
     added = [e for e in sink.events if isinstance(e, SkeletonsAdded) and e.plans]
     assert added and any("cfree a" in line and "doubted" in line for line in added[0].learned)
+
+
+def test_a_known_failure_is_not_asked_again_and_learned_goes_on_to_the_next_grasp() -> None:
+    """pickplace-2 seed 1012: B's first two grasps never reach its start pose (the IK, a
+    PDDLStream function, finds nothing and says it will not), and the list of grasps starts
+    again at them under every new node. The search asks no failed function twice
+    (TreeSearch.memo_exhausted: the failure comes back as a reused answer), and the learned
+    search, predicting those known failures as failures (LearnedConfig.known_failures), goes on
+    to the third grasp: with the part off it resampled A's placement and the same two grasps
+    until its budget ran out (3,735 IK failures in 60 s)."""
+    from planner.events import ListSink, StreamQueried
+
+    loaded = load_domain_folder(PICK_PLACE)
+    sink = ListSink()
+    result = plan(
+        str(PICK_PLACE / "scenes" / "pickplace-2.json"),
+        "learned",
+        domain=loaded,
+        seed=1012,
+        budget_s=300,
+        sink=sink,
+    )
+    assert result.status == "solved" and result.valid, result.message
+    asked = [e for e in sink.events if isinstance(e, StreamQueried)]
+    failed = Counter(
+        (e.stream, json.dumps(e.inputs)) for e in asked if not e.success and e.reused_from is None
+    )
+    ik = {k: n for k, n in failed.items() if k[0] == "inverse-kinematics"}
+    assert ik and max(ik.values()) == 1, ik  # each failed once, then known
+    known = [e for e in asked if not e.success and e.reused_from is not None]
+    assert any(e.stream == "inverse-kinematics" for e in known)
+    assert len(asked) < 1000  # 12,676 with known_failures off, to the budget
 
 
 @pytest.mark.parametrize("planner", ["baseline", "learned"])

@@ -256,9 +256,7 @@ def test_a_search_whose_streams_are_all_exhausted_ends_instead_of_asking_again(
     assert queried and all(q.exhausted for q in queried)
     if planner == "learned":
         again = plan("tiny-2", "learned:exhaustion=off", domain=exhaustible, seed=0, budget_s=3)
+        # Off, it never ends: the lists and functions that gave their last are asked again
+        # (their failures come back as known failures, TreeSearch.memo_exhausted, unasked).
         assert again.status == "timeout"
-        # Queries answered "nothing more for these inputs", in 3 s off against the whole run on
-        # (which stream is asked again depends on the plan the search stays on).
-        spent = [q for q in result.result.queries if q.exhausted]
-        asked = [q for q in again.result.queries if q.exhausted]
-        assert len(asked) > 2 * len(spent)
+        assert any(q.exhausted and q.success for q in again.result.queries)
