@@ -21,10 +21,10 @@ from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig, _gr
 from planner.domains.kitchen.values import Conf
 from planner.domains.kitchen.world import PENETRATION, KitchenWorld
 from planner.pddl import Atom
+from planner.robots.pr2.model import ARM_JOINTS, JOINT_LIMITS, REST_ARM_CONF
 from planner.scene import load_scene
 from planner.sim import bodies
 from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
-from planner.sim.pr2_model import ARM_JOINTS, JOINT_LIMITS, REST_ARM_CONF
 from planner.sim.transforms import multiply, quat_from_euler
 from planner.streams import StreamContext
 

@@ -7,8 +7,8 @@ from typing import Any
 from planner.domains.kitchen.geometry import KitchenGeometry, geometry_from_scene
 from planner.domains.kitchen.values import Conf
 from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
+from planner.robots.pr2.model import REST_ARM_CONF
 from planner.scene import Scene, goal_atoms
-from planner.sim.pr2_model import REST_ARM_CONF
 
 GEOMETRY_KEY = "__kitchen_geometry__"  # where a kitchen problem keeps its geometry in values
 

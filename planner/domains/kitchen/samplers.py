@@ -22,20 +22,20 @@ from planner.domains.kitchen.routes import BaseRoutes
 from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
 from planner.domains.kitchen.world import KitchenWorld
 from planner.pddl.structs import Problem
-from planner.sim.ik import arm_ik
+from planner.robots.pr2.ik import arm_ik
+from planner.robots.pr2.model import (
+    ARM_JOINTS,
+    BASE_VELOCITY,
+    JOINT_LIMITS,
+    REST_ARM_CONF,
+    VELOCITY_LIMITS,
+)
 from planner.sim.motion import (
     MotionConfig,
     NoPath,
     plan_base_motion,
     plan_joint_motion,
     seed_ompl,
-)
-from planner.sim.pr2_model import (
-    ARM_JOINTS,
-    BASE_VELOCITY,
-    JOINT_LIMITS,
-    REST_ARM_CONF,
-    VELOCITY_LIMITS,
 )
 from planner.sim.transforms import invert, multiply, quat_from_euler, wrap_angle
 from planner.streams.adapters import Failure, StreamAdapter, StreamContext, from_fn

@@ -27,7 +27,7 @@ from planner.domains.kitchen.problem import ARM, GEOMETRY_KEY, initial_pose_name
 from planner.domains.kitchen.props import block_shape, floor_body, platform_body
 from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
 from planner.pddl.structs import Problem
-from planner.sim.pr2_model import (
+from planner.robots.pr2.model import (
     ARM_JOINTS,
     ARMS,
     BASE_VELOCITY,

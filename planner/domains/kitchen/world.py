@@ -9,10 +9,8 @@ import pybullet as p
 
 from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
 from planner.domains.kitchen.values import Conf, Grasp
-from planner.sim import bodies
-from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
-from planner.sim.pr2_dimensions import BASE_LINK
-from planner.sim.pr2_model import (
+from planner.robots.pr2.dimensions import BASE_LINK
+from planner.robots.pr2.model import (
     ARM_JOINTS,
     ARM_LINKS,
     ARMS,
@@ -21,6 +19,8 @@ from planner.sim.pr2_model import (
     TORSO_JOINT,
     URDF_PATH,
 )
+from planner.sim import bodies
+from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
 from planner.sim.transforms import Pose, invert, multiply, planar_pose
 
 log = logging.getLogger(__name__)

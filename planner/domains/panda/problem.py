@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 from planner.domains.panda.geometry import PandaGeometry, geometry_from_scene
-from planner.domains.panda.robot import READY
 from planner.domains.panda.values import Conf
 from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
+from planner.robots.panda.model import READY
 from planner.scene import Scene, SceneError, goal_atoms
 
 GEOMETRY_KEY = "__panda_geometry__"  # where a Panda problem keeps its geometry in values

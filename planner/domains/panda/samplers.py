@@ -26,10 +26,10 @@ from planner.domains.panda.geometry import (
     grid_slots,
 )
 from planner.domains.panda.problem import geometry_of
-from planner.domains.panda.robot import LOWER, READY, UPPER, duration, within_limits
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.world import PandaWorld
 from planner.pddl.structs import Problem
+from planner.robots.panda.model import LOWER, READY, UPPER, duration, within_limits
 from planner.sim.motion import MotionConfig, NoPath, plan_joint_motion, seed_ompl
 from planner.sim.transforms import Pose, angle_between, multiply, quat_from_yaw, wrap_angle
 from planner.streams.adapters import Failure, StreamAdapter, StreamContext, from_fn

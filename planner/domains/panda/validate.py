@@ -19,12 +19,12 @@ from typing import Any
 from planner.abstract.skeleton import GroundAction
 from planner.domains.panda.geometry import PandaGeometry
 from planner.domains.panda.problem import START_CONF, geometry_of
-from planner.domains.panda.robot import duration, within_limits
 from planner.domains.panda.samplers import tool_target
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.world import PENETRATION, PandaWorld
 from planner.domains.spec import PlanCheck
 from planner.pddl.structs import Problem
+from planner.robots.panda.model import duration, within_limits
 from planner.sim.transforms import angle_between
 
 POSITION_TOLERANCE = 0.005  # metres between where the tool is and where the grasp puts it

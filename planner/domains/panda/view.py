@@ -32,7 +32,9 @@ from planner.abstract.skeleton import GroundAction
 from planner.domains.panda.geometry import PandaGeometry, block_pose_to_pose
 from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
 from planner.domains.panda.props import floor_body, region_body, rgb, table_body
-from planner.domains.panda.robot import (
+from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
+from planner.pddl.structs import Problem
+from planner.robots.panda.model import (
     ARM_JOINTS,
     FINGER_JOINTS,
     FINGER_OPEN,
@@ -41,9 +43,7 @@ from planner.domains.panda.robot import (
     VELOCITY,
     finger_joint,
 )
-from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
-from planner.domains.panda.visuals import panda_kinematics, viewer_urdf
-from planner.pddl.structs import Problem
+from planner.robots.panda.visuals import panda_kinematics, viewer_urdf
 from planner.sim.transforms import Pose, invert, multiply
 from planner.view import (
     ActionSteps,

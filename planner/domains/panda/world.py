@@ -9,7 +9,8 @@ from collections.abc import Iterable, Mapping, Sequence
 import pybullet as p
 
 from planner.domains.panda.geometry import PandaGeometry, Region, block_pose_to_pose
-from planner.domains.panda.robot import (
+from planner.domains.panda.values import BlockPose, Grasp
+from planner.robots.panda.model import (
     ARM_JOINTS,
     BASE_LINK,
     FINGER_JOINTS,
@@ -19,7 +20,6 @@ from planner.domains.panda.robot import (
     finger_joint,
     urdf_path,
 )
-from planner.domains.panda.values import BlockPose, Grasp
 from planner.sim import bodies
 from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
 from planner.sim.transforms import Pose, invert, multiply
