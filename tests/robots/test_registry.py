@@ -53,7 +53,9 @@ def test_the_project_s_robots_are_known_by_name() -> None:
 
 
 def test_an_unknown_robot_lists_the_known_ones() -> None:
-    with pytest.raises(UnknownRobotError, match=r"unknown robot 'ur5' \(known robots: panda, pr2\)"):
+    with pytest.raises(
+        UnknownRobotError, match=r"unknown robot 'ur5' \(known robots: panda, pr2\)"
+    ):
         get_robot("ur5")
 
 
