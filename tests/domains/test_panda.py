@@ -13,8 +13,9 @@ import pytest
 
 from planner.abstract.skeleton import GroundAction
 from planner.domains import load_domain
+from planner.domains.manipulation.problem import initial_pose_name
 from planner.domains.panda.geometry import geometry_from_scene
-from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
+from planner.domains.panda.problem import START_CONF, geometry_of
 from planner.domains.panda.samplers import PandaSamplers, grasp_height, tool_target
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.world import PandaWorld

@@ -20,13 +20,12 @@ from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 from planner.abstract.skeleton import GroundAction
 from planner.domains import problem_for_scene
-from planner.domains.panda.geometry import block_pose_to_pose
-from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
+from planner.domains.manipulation.problem import block_pose_to_pose, initial_pose_name
+from planner.domains.panda.problem import ROBOT, START_CONF, geometry_of
 from planner.domains.panda.samplers import PandaSamplers
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.view import (
     GHOST_PAD,
-    ROBOT,
     PandaTimeline,
     PandaView,
     robot_joints,
