@@ -128,3 +128,17 @@ def test_the_pr2_s_files_ship_inside_the_package() -> None:
         assert path.is_file(), path
         assert _shipped(path), f"{path} is not package data (pyproject.toml)"
     assert not _shipped(ROOT / "scenes" / "kitchen-1.json")  # the check can fail
+
+
+def test_every_file_the_package_holds_ships_in_the_wheel() -> None:
+    """Each domain's and each robot's own files (PDDL, scenes, shipped models, URDFs, meshes)
+    are package data: what the wheel installs is what the source tree runs with."""
+    files = [
+        path
+        for path in PACKAGE.rglob("*")
+        if path.is_file() and "__pycache__" not in path.parts and path.suffix not in (".py", ".pyc")
+    ]
+    kinds = {path.suffix for path in files}
+    assert {".pddl", ".json", ".pt", ".urdf", ".obj"} <= kinds  # the walk found the assets
+    missing = sorted(str(path.relative_to(PACKAGE)) for path in files if not _shipped(path))
+    assert not missing, f"not package data (pyproject.toml): {missing}"
