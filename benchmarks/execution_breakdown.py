@@ -18,7 +18,7 @@ import statistics
 import sys
 from typing import Any
 
-from planner.sim.pr2_model import BASE_VELOCITY
+from planner.robots.pr2.model import BASE_VELOCITY
 from planner.sim.transforms import wrap_angle
 from planner.store import RunStore
 

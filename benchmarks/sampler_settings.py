@@ -27,8 +27,8 @@ from typing import Any
 
 from _common import parse_seeds
 
+from planner.robots.pr2.model import BASE_VELOCITY
 from planner.runs import PLANNERS, RunConfig
-from planner.sim.pr2_model import BASE_VELOCITY
 from planner.sim.transforms import wrap_angle
 
 

@@ -255,7 +255,7 @@ def _ik_travel(order: str) -> tuple[list[float], list[float], int]:
     failures, with IK's base poses in ``order``."""
     from planner.domains.kitchen.samplers import _grasps, _straight_base_s
     from planner.domains.kitchen.values import Conf
-    from planner.sim.pr2_model import REST_ARM_CONF
+    from planner.robots.pr2.model import REST_ARM_CONF
 
     travel, routes, failed = [], [], 0
     for seed in (0, 1):

@@ -13,13 +13,14 @@ import pytest
 
 from planner.abstract.skeleton import GroundAction
 from planner.domains import load_domain
+from planner.domains.manipulation.problem import initial_pose_name
 from planner.domains.panda.geometry import geometry_from_scene
-from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
-from planner.domains.panda.robot import LOWER, UPPER
+from planner.domains.panda.problem import START_CONF, geometry_of
 from planner.domains.panda.samplers import PandaSamplers, grasp_height, tool_target
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.world import PandaWorld
 from planner.pddl.structs import Atom, Problem
+from planner.robots.panda.model import LOWER, UPPER
 from planner.scene import Scene, SceneError, load_scene
 from planner.sim.transforms import angle_between
 from planner.streams.adapters import StreamContext

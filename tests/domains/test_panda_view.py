@@ -20,10 +20,20 @@ from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 from planner.abstract.skeleton import GroundAction
 from planner.domains import problem_for_scene
-from planner.domains.panda import visuals
-from planner.domains.panda.geometry import block_pose_to_pose
-from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
-from planner.domains.panda.robot import (
+from planner.domains.manipulation.problem import block_pose_to_pose, initial_pose_name
+from planner.domains.panda.problem import ROBOT, START_CONF, geometry_of
+from planner.domains.panda.samplers import PandaSamplers
+from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
+from planner.domains.panda.view import (
+    GHOST_PAD,
+    PandaTimeline,
+    PandaView,
+    robot_joints,
+    tool_pose,
+)
+from planner.pddl.structs import Problem
+from planner.robots.panda import visuals
+from planner.robots.panda.model import (
     FINGER_OPEN,
     LOWER,
     READY,
@@ -33,18 +43,7 @@ from planner.domains.panda.robot import (
     finger_joint,
     urdf_path,
 )
-from planner.domains.panda.samplers import PandaSamplers
-from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
-from planner.domains.panda.view import (
-    GHOST_PAD,
-    ROBOT,
-    PandaTimeline,
-    PandaView,
-    robot_joints,
-    tool_pose,
-)
-from planner.domains.panda.visuals import panda_kinematics, viewer_urdf
-from planner.pddl.structs import Problem
+from planner.robots.panda.visuals import panda_kinematics, viewer_urdf
 from planner.sim.render import render_scene
 from planner.sim.transforms import Pose, angle_between, multiply
 from planner.view import Box, QueryView, Urdf

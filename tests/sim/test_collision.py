@@ -19,12 +19,13 @@ import pytest
 from planner.domains.kitchen.geometry import KitchenGeometry, geometry_from_scene
 from planner.domains.kitchen.samplers import KitchenSamplers, SamplerConfig, _grasps
 from planner.domains.kitchen.values import Conf
-from planner.domains.kitchen.world import PENETRATION, KitchenWorld
+from planner.domains.kitchen.world import KitchenWorld
+from planner.domains.manipulation.world import PENETRATION
 from planner.pddl import Atom
+from planner.robots.pr2.model import ARM_JOINTS, JOINT_LIMITS, REST_ARM_CONF
 from planner.scene import load_scene
 from planner.sim import bodies
 from planner.sim.collision import Attached, CollisionConfig, Obstacles, RobotCollision
-from planner.sim.pr2_model import ARM_JOINTS, JOINT_LIMITS, REST_ARM_CONF
 from planner.sim.transforms import multiply, quat_from_euler
 from planner.streams import StreamContext
 
@@ -47,7 +48,7 @@ def _kitchen_exact(world: KitchenWorld, *, ignore: Iterable[str] = (), clearance
     held = world.held[0] if world.held else None
     skip = set(ignore)
     obstacles = list(world.fixtures.values()) + [
-        world.blocks[n] for n in world._placed if n not in skip and n != held
+        world.blocks[n] for n in world.placed if n not in skip and n != held
     ]
     if any(_closer(c, robot, o, margin) for o in obstacles):
         return True

@@ -6,81 +6,46 @@ like any other domain; pybullet is imported only when samplers or the validator 
 
 from __future__ import annotations
 
-import random
-from collections.abc import Mapping, Sequence
-from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from planner.abstract.skeleton import GroundAction
 from planner.domains.kitchen.codec import VALUE_TYPES
 from planner.domains.kitchen.features import KitchenFeatures
 from planner.domains.kitchen.problem import (
     ARM,
     GEOMETRY_KEY,
     START_CONF,
-    initial_pose_name,
     problem_from_scene,
     static_context,
 )
 from planner.domains.kitchen.view import KitchenView
-from planner.domains.spec import DomainSpec, LoadedDomain, PlanCheck
-from planner.pddl.structs import Problem
-from planner.streams.adapters import StreamAdapter
+from planner.domains.manipulation.domain import (
+    LazySamplers,
+    LazyValidator,
+    stream_inputs,
+    with_bindings,
+)
+from planner.domains.manipulation.problem import initial_pose_name
+from planner.domains.spec import DomainSpec, LoadedDomain
 
 if TYPE_CHECKING:
     from planner.domains.kitchen.samplers import SamplerConfig
 
+SAMPLERS = "planner.domains.kitchen.samplers"  # imported when first sampling: pybullet then
 MODEL = Path(__file__).resolve().parent / "model.pt"  # the shipped model (docs/learning.md)
-
-
-def _bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
-    from planner.domains.kitchen.samplers import bindings  # pybullet only when sampling
-
-    return bindings(problem, rng)
-
-
-def with_samplers(loaded: LoadedDomain, config: SamplerConfig) -> LoadedDomain:
-    """The loaded kitchen with its samplers set by ``config`` instead of the defaults: for
-    probes that compare sampler settings (pass it to :func:`planner.api.solve` as ``loaded``)."""
-
-    def bindings(problem: Problem, rng: random.Random) -> Mapping[str, StreamAdapter]:
-        from planner.domains.kitchen.samplers import bindings as kitchen_bindings
-
-        return kitchen_bindings(problem, rng, config)
-
-    if loaded.spec.name != DOMAIN.name:
-        raise ValueError(f"with_samplers takes the kitchen, got domain {loaded.spec.name!r}")
-    return replace(loaded, spec=replace(loaded.spec, bindings=bindings))
-
-
-def validate(
-    actions: Sequence[GroundAction], values: Mapping[str, Any], problem: Problem
-) -> PlanCheck:
-    """Replay the plan in simulation (planner/domains/kitchen/validate.py)."""
-    from planner.domains.kitchen.validate import validate_plan
-
-    report = validate_plan(actions, values, problem)
-    return PlanCheck(report.ok, report.message, report.execution_s)
 
 
 DOMAIN = DomainSpec(
     name="kitchen",
     description="the PR2 kitchen: clean blocks at the sink, cook them on the stove",
     problem_from_scene=problem_from_scene,
-    bindings=_bindings,
+    bindings=LazySamplers(SAMPLERS),
     value_types=VALUE_TYPES,
-    validate=validate,
+    validate=LazyValidator("planner.domains.kitchen.validate"),
     static_context=static_context,
     view=KitchenView(),
     features=KitchenFeatures(),
-    # What each stream's inputs are (a stream may go unrecorded in a model's training data).
-    input_kinds={
-        "sample-grasp": ("name",),
-        "sample-placement": ("name", "name"),
-        "inverse-kinematics": ("name", "pose", "grasp"),
-        "plan-motion": ("conf", "conf"),
-    },
+    input_kinds=stream_inputs("pose", "grasp", "conf"),
     model=MODEL,
     diversity_ignore=("move",),  # moves only connect configurations; compare what is done
     # Where the robot stands and how it holds the block do not change where a block fits.
@@ -90,6 +55,13 @@ DOMAIN = DomainSpec(
     # the blocks' placements come together and a full stove is blamed on the placements alone.
     unread={"sample-placement": ("at-conf", "can-move", "holding")},
 )
+
+
+def with_samplers(loaded: LoadedDomain, config: SamplerConfig) -> LoadedDomain:
+    """The loaded kitchen with its samplers set by ``config`` instead of the defaults: for
+    probes that compare sampler settings (pass it to :func:`planner.api.solve` as ``loaded``)."""
+    return with_bindings(loaded, DOMAIN.name, LazySamplers(SAMPLERS, config))
+
 
 __all__ = [
     "ARM",

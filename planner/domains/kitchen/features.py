@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from planner.domains.manipulation.features import FloatArray, Inputs, Slots, feature_numbers
 from planner.domains.spec import QueryLike
 from planner.values import JSON, FeatureError, ValueCodec
 
@@ -63,7 +64,6 @@ ROOM_CAP = 30.0  # centimetres: more room than this is plenty
 ROOM_GRID = 9  # candidate centres per side of the platform
 FACTS_READ_MAX = 4096  # facts lists whose reading is kept (a search has one per state)
 
-FloatArray = npt.NDArray[np.float32]
 # What a facts list sets (KitchenEncoder._read_facts): the state part before the poses' values
 # (present, on a platform, held, the counts), and per block with an at-pose fact, where its pose
 # goes in the state part and the pose's name.
@@ -71,15 +71,6 @@ _FactsRead = tuple[FloatArray, list[tuple[int, str]]]
 # What a facts list says of the blocks (KitchenEncoder._read_blocks): the blocks it names, the
 # held one, each block's platform and the name of its pose.
 _BlocksRead = tuple[frozenset[str], str | None, dict[str, str], dict[str, str]]
-
-
-def _numbers(value: Any, n: int, where: str) -> list[float]:
-    if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != n:
-        raise FeatureError(f"{where}: expected {n} numbers, got {value!r}")
-    try:
-        return [float(v) for v in value]
-    except (TypeError, ValueError) as exc:
-        raise FeatureError(f"{where}: expected {n} numbers, got {value!r}") from exc
 
 
 def _is_pose(value: Any) -> bool:
@@ -257,13 +248,7 @@ class KitchenEncoder:
         self._rooms[key] = (geometry, poses, room)  # kept, so their ids are not reused
         return room
 
-    def finish_row(
-        self,
-        stream: str,
-        inputs: Sequence[JSON | None],
-        row: FloatArray,
-        slots: Sequence[tuple[str, int, int]],
-    ) -> None:
+    def finish_row(self, stream: str, inputs: Inputs, row: FloatArray, slots: Slots) -> None:
         if self.relative:
             # A block's name says nothing of it (b9 of kitchen-12 is a block like b2): its
             # one-hot is cleared, so that a model reads the block only through its own
@@ -279,7 +264,7 @@ class KitchenEncoder:
             value = inputs[i]
             if kind != "conf" or not isinstance(value, Mapping):
                 continue
-            wrist = _numbers(value.get("arm"), 7, f"stream {stream!r} input {i}.arm")[6]
+            wrist = feature_numbers(value.get("arm"), 7, f"stream {stream!r} input {i}.arm")[6]
             at = offset + width
             if i + 1 < len(slots):
                 if inputs[i + 1] is not None:  # an unbound next slot set its mask bit over it
@@ -460,8 +445,8 @@ def _room(
     box, size = footprints.get(platform), sizes.get(block)
     if box is None or size is None:
         return [1.0, 0.0, 0.0]
-    xmin, xmax, ymin, ymax = _numbers(box, 4, f"context geometry platform {platform!r}")
-    (half,) = (v / 2 for v in _numbers([size], 1, f"context geometry block {block!r}"))
+    xmin, xmax, ymin, ymax = feature_numbers(box, 4, f"context geometry platform {platform!r}")
+    (half,) = (v / 2 for v in feature_numbers([size], 1, f"context geometry block {block!r}"))
     others = len(on - {block})
     centres = [(float(p["x"]), float(p["y"])) for p in poses if _is_pose(p)]
     if xmax - xmin < 2 * half or ymax - ymin < 2 * half:

@@ -11,8 +11,8 @@ import random
 from dataclasses import dataclass
 from typing import Any
 
+from planner.domains.manipulation.problem import UprightPose, by_name
 from planner.scene import Scene, check_name
-from planner.sim.transforms import Pose, quat_from_yaw
 
 PLATFORM_KINDS = ("table", "sink", "stove")  # every kitchen has at least one of each
 Color = tuple[float, float, float, float]
@@ -53,18 +53,8 @@ class Block:
 
 
 @dataclass(frozen=True)
-class BlockPose:
+class BlockPose(UprightPose):
     """An upright block on a platform: centre x, y, z and yaw."""
-
-    x: float
-    y: float
-    z: float
-    yaw: float
-
-
-def block_pose_to_pose(pose: BlockPose) -> Pose:
-    """A block pose as a (position, xyzw quaternion) pose."""
-    return ((pose.x, pose.y, pose.z), quat_from_yaw(pose.yaw))
 
 
 @dataclass(frozen=True)
@@ -89,16 +79,10 @@ class KitchenGeometry:
     spawn: SpawnRegion
 
     def platform(self, name: str) -> Platform:
-        for p in self.platforms:
-            if p.name == name:
-                return p
-        raise KeyError(f"no platform {name!r} (known: {', '.join(p.name for p in self.platforms)})")
+        return by_name(self.platforms, name, "platform")
 
     def block(self, name: str) -> Block:
-        for b in self.blocks:
-            if b.name == name:
-                return b
-        raise KeyError(f"no block {name!r}")
+        return by_name(self.blocks, name, "block")
 
     def initial_poses(self, seed: int) -> dict[str, BlockPose]:
         """Seeded, collision-free initial poses of every block on its start platform."""

@@ -6,12 +6,14 @@ from typing import Any
 
 from planner.domains.kitchen.geometry import KitchenGeometry, geometry_from_scene
 from planner.domains.kitchen.values import Conf
-from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
-from planner.scene import Scene, goal_atoms
-from planner.sim.pr2_model import REST_ARM_CONF
+from planner.domains.manipulation.problem import ProblemParts, stored
+from planner.pddl.structs import Atom, Domain, Problem
+from planner.robots.pr2.model import REST_ARM_CONF
+from planner.scene import Scene
 
 GEOMETRY_KEY = "__kitchen_geometry__"  # where a kitchen problem keeps its geometry in values
 
+ROBOT = "pr2"  # the kitchen's robot: its name in planner.robots, and its body's in the 3D view
 START_CONF = "q0"  # the robot's initial base and arm configuration
 ARM = "right"  # the arm that works; the other stays tucked
 
@@ -23,53 +25,26 @@ def problem_from_scene(scene: Scene, domain: Domain, seed: int = 0) -> Problem:
     """
     geometry = geometry_from_scene(scene)
     poses = geometry.initial_poses(seed)
-    values: dict[str, object] = {
-        START_CONF: Conf(geometry.robot.base, geometry.robot.torso, REST_ARM_CONF[ARM]),
-        GEOMETRY_KEY: geometry,
-    }
-    init: set[Atom] = {
-        Atom("conf", (START_CONF,)),
-        Atom("at-conf", (START_CONF,)),
-        Atom("hand-empty"),
-        Atom("can-move"),
-    }
-    objects = [TypedName(START_CONF)]
+    start = Conf(geometry.robot.base, geometry.robot.torso, REST_ARM_CONF[ARM])
+    parts = ProblemParts(START_CONF, {START_CONF: start, GEOMETRY_KEY: geometry})
     for plat in geometry.platforms:
-        objects.append(TypedName(plat.name))
-        init.add(Atom("platform", (plat.name,)))
-        if plat.kind in ("sink", "stove"):
-            init.add(Atom(plat.kind, (plat.name,)))
-    names = {p.name for p in geometry.platforms} | {START_CONF}
+        kind = (Atom(plat.kind, (plat.name,)),) if plat.kind in ("sink", "stove") else ()
+        parts.fixture(plat.name, Atom("platform", (plat.name,)), *kind)
     for block in geometry.blocks:
-        pose = initial_pose_name(block.name)
-        names |= {block.name, pose}
-        values[pose] = poses[block.name]
-        objects += [TypedName(block.name), TypedName(pose)]
-        init |= {
-            Atom("block", (block.name,)),
-            Atom("pose", (block.name, pose)),
-            Atom("supported", (block.name, pose, block.start)),
-            Atom("at-pose", (block.name, pose)),
-            Atom("on", (block.name, block.start)),
-        }
-    arity = {p.name: p.arity for p in domain.predicates}
-    goal = tuple(Literal(Atom(p, a)) for p, a in goal_atoms(scene, arity, names))
-    return Problem(
-        scene.name, domain.name, tuple(objects), frozenset(init), goal, scene.source, values
-    )
+        pose = parts.block(block.name, poses[block.name], block.start)
+        parts.init.add(Atom("supported", (block.name, pose, block.start)))
+    return parts.problem(scene, domain)
 
 
-def initial_pose_name(block: str) -> str:
-    """The object naming a block's initial pose (its value depends on the seed)."""
-    return f"p0-{block}"
+def geometry_of(problem: Problem) -> KitchenGeometry:
+    """The kitchen geometry a problem keeps (a ValueError if it was not built from a scene)."""
+    return stored(problem, GEOMETRY_KEY, KitchenGeometry, "kitchen geometry")
 
 
 def static_context(problem: Problem) -> dict[str, Any]:
     """``{"geometry": {"platforms": {name: [xmin, xmax, ymin, ymax]}, "blocks": {name: edge}}}``:
     the parts of the scene a learned model reads to tell how much room a platform has left."""
-    geometry = problem.values.get(GEOMETRY_KEY)
-    if not isinstance(geometry, KitchenGeometry):
-        raise ValueError(f"problem {problem.name}: no kitchen geometry in its values")
+    geometry = geometry_of(problem)
     return {
         "geometry": {
             "platforms": {p.name: [round(v, 6) for v in p.footprint()] for p in geometry.platforms},

@@ -20,16 +20,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-import numpy as np
 import trimesh
 
 from planner.domains.kitchen.geometry import Block, KitchenGeometry, Platform
+from planner.domains.manipulation.props import tiled_floor
 from planner.sim import meshes as m
 from planner.view import Body, Mesh, Meshes, Rgb, yaw_quat
 
-TILE = 0.5  # floor tiles, metres
 FLOOR_MARGIN = 1.5  # the floor reaches this far beyond the fixtures and the robot's start
-TILE_RGB: tuple[Rgb, Rgb] = ((216, 211, 200), (184, 177, 164))
 STEEL: Rgb = (192, 196, 200)
 BASIN: Rgb = (128, 134, 140)
 BLACK: Rgb = (22, 22, 24)
@@ -208,32 +206,4 @@ def floor_body(geometry: KitchenGeometry) -> Body:
     """The tiled floor under the fixtures and the robot's start, FLOOR_MARGIN beyond them."""
     xs = [x for p in geometry.platforms for x in p.footprint()[:2]] + [geometry.robot.base[0]]
     ys = [y for p in geometry.platforms for y in p.footprint()[2:]] + [geometry.robot.base[1]]
-    x0, x1 = (
-        math.floor((min(xs) - FLOOR_MARGIN) / TILE),
-        math.ceil((max(xs) + FLOOR_MARGIN) / TILE),
-    )
-    y0, y1 = (
-        math.floor((min(ys) - FLOOR_MARGIN) / TILE),
-        math.ceil((max(ys) + FLOOR_MARGIN) / TILE),
-    )
-    parts = []
-    for parity, rgb in enumerate(TILE_RGB):
-        tiles = [
-            (i * TILE, j * TILE)
-            for i in range(x0, x1)
-            for j in range(y0, y1)
-            if (i + j) % 2 == parity
-        ]
-        parts.append(_mesh(f"floor-{parity}", [_tiles(tiles)], rgb))
-    return Body("floor", Meshes(tuple(parts)), label=None)
-
-
-def _tiles(corners: Sequence[tuple[float, float]]) -> trimesh.Trimesh:
-    """Square tiles of side TILE at z = 0 facing up, from their lower-left corners."""
-    vertices: list[tuple[float, float, float]] = []
-    faces: list[tuple[int, int, int]] = []
-    for x, y in corners:
-        k = len(vertices)
-        vertices += [(x, y, 0.0), (x + TILE, y, 0.0), (x + TILE, y + TILE, 0.0), (x, y + TILE, 0.0)]
-        faces += [(k, k + 1, k + 2), (k, k + 2, k + 3)]
-    return trimesh.Trimesh(np.array(vertices), np.array(faces), process=False)
+    return tiled_floor((min(xs), max(xs), min(ys), max(ys)), FLOOR_MARGIN, _mesh)

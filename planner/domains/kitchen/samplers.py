@@ -12,33 +12,35 @@ import logging
 import math
 import random
 from collections import Counter
-from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
-from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, block_pose_to_pose
-from planner.domains.kitchen.problem import GEOMETRY_KEY
+from planner.domains.kitchen.geometry import BlockPose, KitchenGeometry, Platform
+from planner.domains.kitchen.problem import ROBOT, geometry_of
 from planner.domains.kitchen.routes import BaseRoutes
 from planner.domains.kitchen.values import BaseConf, Conf, Grasp, Segment, Trajectory
 from planner.domains.kitchen.world import KitchenWorld
+from planner.domains.manipulation.problem import block_pose_to_pose
+from planner.domains.manipulation.samplers import BlockSamplers, Reach, with_text
 from planner.pddl.structs import Problem
-from planner.sim.ik import arm_ik
+from planner.robots import get_robot
+from planner.robots.base import path_seconds
+from planner.robots.pr2.ik import arm_ik
+from planner.robots.pr2.model import (
+    ARM_JOINTS,
+    BASE_VELOCITY,
+    JOINT_LIMITS,
+    REST_ARM_CONF,
+)
 from planner.sim.motion import (
     MotionConfig,
     NoPath,
     plan_base_motion,
     plan_joint_motion,
-    seed_ompl,
-)
-from planner.sim.pr2_model import (
-    ARM_JOINTS,
-    BASE_VELOCITY,
-    JOINT_LIMITS,
-    REST_ARM_CONF,
-    VELOCITY_LIMITS,
 )
 from planner.sim.transforms import invert, multiply, quat_from_euler, wrap_angle
-from planner.streams.adapters import Failure, StreamAdapter, StreamContext, from_fn
+from planner.streams.adapters import Failure, StreamAdapter, StreamContext
 
 log = logging.getLogger(__name__)
 
@@ -93,11 +95,7 @@ class SamplerConfig:
     def with_text(self, name: str, text: str) -> SamplerConfig:
         """This config with its text or number field ``name`` set from ``text`` (as a command
         line gives it); a ValueError says what is wrong."""
-        default = getattr(self, name, None)
-        if not isinstance(default, str | int | float):
-            raise ValueError(f"{name!r} is not a text or number field of SamplerConfig")
-        changes: dict[str, Any] = {name: type(default)(text)}
-        return replace(self, **changes)
+        return with_text(self, name, text)
 
 
 def _grasps(size: float, approach: float) -> list[Grasp]:
@@ -139,12 +137,7 @@ def _rect_distance(x: float, y: float, rect: tuple[float, float, float, float]) 
 
 
 def _arm_duration(path: list[tuple[float, ...]], joints: tuple[str, ...]) -> float:
-    seconds = 0.0
-    for a, b in itertools.pairwise(path):
-        seconds += max(
-            abs(y - x) / VELOCITY_LIMITS[j] for x, y, j in zip(a, b, joints, strict=True)
-        )
-    return seconds
+    return path_seconds(path, get_robot(ROBOT).velocities(joints))
 
 
 def _base_duration(path: list[BaseConf]) -> float:
@@ -174,7 +167,7 @@ def _standing_at(context: StreamContext | None) -> BaseConf | None:
     return None
 
 
-class KitchenSamplers:
+class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajectory]):
     """The samplers of one kitchen problem, sharing one pybullet world."""
 
     def __init__(
@@ -185,12 +178,10 @@ class KitchenSamplers:
         arm: str = "right",
         config: SamplerConfig = SamplerConfig(),
     ) -> None:
+        super().__init__(KitchenWorld(geometry, arm), rng, BlockPose, Grasp)
         self.geometry = geometry
-        self.rng = rng
         self.arm = arm
         self.config = config
-        self.world = KitchenWorld(geometry, arm)
-        seed_ompl(rng.randrange(1, 2**31))  # OMPL takes one seed per process: the first run's
         xs = [x for p in geometry.platforms for x in p.footprint()[:2]]
         ys = [y for p in geometry.platforms for y in p.footprint()[2:]]
         m = config.workspace_margin
@@ -205,45 +196,24 @@ class KitchenSamplers:
             velocity=BASE_VELOCITY,
         )
 
-    def close(self) -> None:
-        self.world.close()
-
-    # --- context -----------------------------------------------------------------------------
-
-    def _apply(self, context: StreamContext | None) -> None:
-        """Put blocks where the context says and attach what the hand holds."""
-        poses: dict[str, BlockPose] = {}
-        held: tuple[str, Grasp] | None = None
-        if context is not None:
-            for block, pose in context.holds("at-pose"):
-                value = context.values.get(pose)
-                if isinstance(value, BlockPose):
-                    poses[block] = value
-            for block, grasp in context.holds("holding"):
-                value = context.values.get(grasp)
-                if isinstance(value, Grasp):
-                    held = (block, value)
-        self.world.hold(None)
-        self.world.set_blocks(poses)
-        if held is not None:
-            self.world.hold(*held)
-
     # --- streams -----------------------------------------------------------------------------
 
     def sample_grasp(self, block: str) -> tuple[Grasp]:
         size = self.geometry.block(block).size
         return (self.rng.choice(_grasps(size, self.config.approach)),)
 
-    def sample_placement(
-        self, block: str, platform: str, *, context: StreamContext | None = None
-    ) -> tuple[BlockPose] | Failure:
-        self._apply(context)
+    def _placement(self, block: str, platform: str) -> tuple[BlockPose] | Failure:
         plat = self.geometry.platform(platform)
         size = self.geometry.block(block).size
         xmin, xmax, ymin, ymax = plat.footprint()
         if xmax - xmin < size or ymax - ymin < size:
             return Failure(f"{block} is larger than {platform}")
-        poses = dict(self.world._placed)
+        candidates = self._placements(plat, size)
+        return self._free_place(block, candidates, self.config.placement_gap, f"on {platform}")
+
+    def _placements(self, plat: Platform, size: float) -> Iterator[BlockPose | None]:
+        """``placement_attempts`` poses drawn on a platform (None: a turn that does not fit)."""
+        xmin, xmax, ymin, ymax = plat.footprint()
         cfg = self.config
         for _ in range(cfg.placement_attempts):
             # Mostly square to the platform on a grid that starts in its corners, so that a
@@ -255,6 +225,7 @@ class KitchenSamplers:
                 yaw = self.rng.uniform(-math.pi, math.pi)
             half = size / 2 * (abs(math.cos(yaw)) + abs(math.sin(yaw)))  # of the turned square
             if xmax - xmin < 2 * half or ymax - ymin < 2 * half:
+                yield None
                 continue
             if corner:
                 pitch = 2 * half + cfg.placement_gap + 2 * cfg.corner_jitter
@@ -265,30 +236,17 @@ class KitchenSamplers:
             else:
                 x = self.rng.uniform(xmin + half, xmax - half)
                 y = self.rng.uniform(ymin + half, ymax - half)
-            pose = BlockPose(x, y, plat.top + size / 2, yaw)
-            poses[block] = pose
-            self.world.set_blocks(poses)
-            if not self.world.block_collides(block, margin=self.config.placement_gap):
-                return (pose,)
-        return Failure(f"no free place on {platform} in {cfg.placement_attempts} tries")
+            yield BlockPose(x, y, plat.top + size / 2, yaw)
 
-    def inverse_kinematics(
-        self, block: str, pose: BlockPose, grasp: Grasp, *, context: StreamContext | None = None
-    ) -> tuple[Conf] | Failure:
-        self._apply(context)
+    def _inverse_kinematics(self, reach: Reach[BlockPose, Grasp]) -> tuple[Conf] | Failure:
+        block, pose, grasp, placing = reach.block, reach.pose, reach.grasp, reach.placing
         world = self.world
-        placing = world.held is not None and world.held[0] == block
-        placed = dict(world._placed)
-        if not placing:
-            placed[block] = pose  # picking: the block stands at the pose
-        world.hold(None)
-        world.set_blocks(placed)
         tool_world = multiply(block_pose_to_pose(pose), grasp.tool_in_block)
         pre_world = multiply(tool_world, ((-grasp.approach, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
         torso = self.geometry.robot.torso
         # Picking, the gripper closes around the block; placing, the block rides in it.
         touching = () if placing else (block,)
-        bases = self._base_candidates(pose, _standing_at(context))
+        bases = self._base_candidates(pose, _standing_at(reach.context))
         if not bases:
             return Failure("no base pose within reach and clear of the fixtures")
         rejected: Counter[str] = Counter()  # why each base pose or IK solution was refused
@@ -365,7 +323,7 @@ class KitchenSamplers:
     ) -> bool:
         """Picking, the hand leaves along the same straight line with the block in it: the block
         must not sweep through its neighbours (going in, the hand was empty)."""
-        placed = dict(self.world._placed)
+        placed = dict(self.world.placed)
         self.world.set_conf(Conf(base, torso, arm))
         self.world.hold(block, grasp)
         try:
@@ -379,7 +337,7 @@ class KitchenSamplers:
         block must keep the motion planner's clearance there too. (Without this check a side
         grasp could lift a block to within 1.5 cm of its neighbour, and every motion from the
         conf then failed at once: 27 motion queries of one kitchen-6 benchmark.)"""
-        placed = dict(self.world._placed)
+        placed = dict(self.world.placed)
         self.world.hold(block, grasp)
         try:
             self.world.set_conf(conf, approach=True)
@@ -424,10 +382,7 @@ class KitchenSamplers:
                 return base
         return None
 
-    def plan_motion(
-        self, q1: Conf, q2: Conf, *, context: StreamContext | None = None
-    ) -> tuple[Trajectory] | Failure:
-        self._apply(context)
+    def _motion(self, q1: Conf, q2: Conf) -> tuple[Trajectory] | Failure:
         world = self.world
         joints = ARM_JOINTS[self.arm]
         holding = world.held[0] if world.held else None
@@ -492,13 +447,4 @@ def bindings(
 ) -> Mapping[str, StreamAdapter]:
     """The kitchen's samplers for ``problem`` (which carries its geometry in ``values``), set by
     ``config``."""
-    geometry = problem.values.get(GEOMETRY_KEY)
-    if not isinstance(geometry, KitchenGeometry):
-        raise ValueError("a kitchen problem must be built from a scene (its geometry is missing)")
-    s = KitchenSamplers(geometry, rng, config=config)
-    return {
-        "sample-grasp": from_fn(s.sample_grasp),
-        "sample-placement": from_fn(s.sample_placement, context=True),
-        "inverse-kinematics": from_fn(s.inverse_kinematics, context=True),
-        "plan-motion": from_fn(s.plan_motion, context=True),
-    }
+    return KitchenSamplers(geometry_of(problem), rng, config=config).bindings()

@@ -31,14 +31,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from planner.domains.manipulation.features import FloatArray, Inputs, Slots, feature_numbers
 from planner.domains.panda.geometry import grid_slots
 from planner.domains.spec import QueryLike
 from planner.values import JSON, FeatureError, ValueCodec
 
 KIND = "panda"  # the name model files give these features
-FloatArray = npt.NDArray[np.float32]
 
 FINGER_HALF_WIDTH = 0.011  # metres: half a finger's width across the axis it closes on
 FINGER_ROOM = 0.025  # metres a closed finger needs beside a block's face
@@ -60,15 +59,6 @@ STREAMS: Mapping[str, tuple[str, ...]] = {
     ),
 }
 SCENE = ("n_on_table", "n_in_goal_regions", "holding", "n_obstructed")
-
-
-def _numbers(value: Any, n: int, where: str) -> list[float]:
-    if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != n:
-        raise FeatureError(f"{where}: expected {n} numbers, got {value!r}")
-    try:
-        return [float(v) for v in value]
-    except (TypeError, ValueError) as exc:
-        raise FeatureError(f"{where}: expected {n} numbers, got {value!r}") from exc
 
 
 def _pose(value: Any) -> tuple[float, float, float, float] | None:
@@ -109,12 +99,12 @@ def _scene(context: Mapping[str, Any]) -> _Scene | None:
     for name, r in regions_raw.items():
         if not isinstance(r, Mapping):
             raise FeatureError(f"context geometry region {name!r}: expected an object")
-        box = _numbers(r.get("box"), 4, f"context geometry region {name!r}.box")
+        box = feature_numbers(r.get("box"), 4, f"context geometry region {name!r}.box")
         rim = float(r.get("rim", 0.0))
         regions[str(name)] = ((box[0], box[1], box[2], box[3]), str(r.get("kind", "")), rim)
     sizes = {}
     for name, s in sizes_raw.items():
-        n = _numbers(s, 3, f"context geometry block {name!r}")
+        n = feature_numbers(s, 3, f"context geometry block {name!r}")
         sizes[str(name)] = (n[0], n[1], n[2])
     facts = context.get("facts", [])
     values = context.get("values", {})
@@ -292,13 +282,7 @@ class PandaEncoder:
     def feature_names(self, stream: str) -> tuple[list[str], list[str]]:
         return list(STREAMS.get(stream, ())), list(SCENE)
 
-    def finish_row(
-        self,
-        stream: str,
-        inputs: Sequence[JSON | None],
-        row: FloatArray,
-        slots: Sequence[tuple[str, int, int]],
-    ) -> None:
+    def finish_row(self, stream: str, inputs: Inputs, row: FloatArray, slots: Slots) -> None:
         return None
 
 

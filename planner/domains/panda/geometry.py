@@ -14,9 +14,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from planner.domains.manipulation.problem import by_name
 from planner.domains.panda.values import BlockPose
 from planner.scene import Scene, SceneError, check_name
-from planner.sim.transforms import Pose, quat_from_yaw
 
 REGION_KINDS = ("table", "tray", "shelf")  # where blocks start (table), where they go (the rest)
 Color = tuple[float, float, float, float]
@@ -114,16 +114,10 @@ class PandaGeometry:
     spawn: Spawn
 
     def region(self, name: str) -> Region:
-        for r in self.regions:
-            if r.name == name:
-                return r
-        raise KeyError(f"no region {name!r} (known: {', '.join(r.name for r in self.regions)})")
+        return by_name(self.regions, name, "region")
 
     def block(self, name: str) -> Block:
-        for b in self.blocks:
-            if b.name == name:
-                return b
-        raise KeyError(f"no block {name!r}")
+        return by_name(self.blocks, name, "block")
 
     def placeable(self, block: Block) -> tuple[str, ...]:
         """The regions a block may be put in: an obstacle back on the table, a target into a
@@ -269,10 +263,6 @@ def footprint_half(size: tuple[float, float, float], yaw: float) -> tuple[float,
     """Half the x and y extent of a block's footprint turned by ``yaw``."""
     c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
     return (size[0] / 2 * c + size[1] / 2 * s, size[0] / 2 * s + size[1] / 2 * c)
-
-
-def block_pose_to_pose(pose: BlockPose) -> Pose:
-    return ((pose.x, pose.y, pose.z), quat_from_yaw(pose.yaw))
 
 
 # --- reading a scene file ---------------------------------------------------------------------

@@ -4,19 +4,16 @@ from __future__ import annotations
 
 from typing import Any
 
+from planner.domains.manipulation.problem import ProblemParts, stored
 from planner.domains.panda.geometry import PandaGeometry, geometry_from_scene
-from planner.domains.panda.robot import READY
 from planner.domains.panda.values import Conf
-from planner.pddl.structs import Atom, Domain, Literal, Problem, TypedName
-from planner.scene import Scene, SceneError, goal_atoms
+from planner.pddl.structs import Atom, Domain, Problem
+from planner.robots.panda.model import READY
+from planner.scene import Scene, SceneError
 
 GEOMETRY_KEY = "__panda_geometry__"  # where a Panda problem keeps its geometry in values
+ROBOT = "panda"  # the domain's robot: its name in planner.robots, and its body's in the 3D view
 START_CONF = "q0"  # the arm's start configuration
-
-
-def initial_pose_name(block: str) -> str:
-    """The object naming a block's start pose (its value depends on the seed)."""
-    return f"p0-{block}"
 
 
 def problem_from_scene(scene: Scene, domain: Domain, seed: int = 0) -> Problem:
@@ -26,50 +23,23 @@ def problem_from_scene(scene: Scene, domain: Domain, seed: int = 0) -> Problem:
         poses = geometry.initial_poses(seed)
     except ValueError as err:
         raise SceneError(f"{scene.source}: spawn: {err}") from None
-    values: dict[str, object] = {START_CONF: Conf(READY, READY), GEOMETRY_KEY: geometry}
-    init: set[Atom] = {
-        Atom("conf", (START_CONF,)),
-        Atom("at-conf", (START_CONF,)),
-        Atom("hand-empty"),
-        Atom("can-move"),
-    }
-    objects = [TypedName(START_CONF)]
-    names = {START_CONF}
+    parts = ProblemParts(START_CONF, {START_CONF: Conf(READY, READY), GEOMETRY_KEY: geometry})
     for region in geometry.regions:
-        objects.append(TypedName(region.name))
-        names.add(region.name)
-        init.add(Atom("region", (region.name,)))
+        parts.fixture(region.name, Atom("region", (region.name,)))
     for block in geometry.blocks:
-        pose = initial_pose_name(block.name)
-        names |= {block.name, pose}
-        values[pose] = poses[block.name]
-        objects += [TypedName(block.name), TypedName(pose)]
-        init |= {
-            Atom("block", (block.name,)),
-            Atom("pose", (block.name, pose)),
-            Atom("at-pose", (block.name, pose)),
-            Atom("on", (block.name, block.start)),
-        }
-        init |= {Atom("placeable", (block.name, r)) for r in geometry.placeable(block)}
+        parts.block(block.name, poses[block.name], block.start)
+        parts.init |= {Atom("placeable", (block.name, r)) for r in geometry.placeable(block)}
         if block.blocks is not None:
-            init |= {
+            parts.init |= {
                 Atom("obstructs", (block.name, block.blocks)),
                 Atom("obstructed", (block.blocks,)),
             }
-    arity = {p.name: p.arity for p in domain.predicates}
-    goal = tuple(Literal(Atom(p, a)) for p, a in goal_atoms(scene, arity, names))
-    return Problem(
-        scene.name, domain.name, tuple(objects), frozenset(init), goal, scene.source, values
-    )
+    return parts.problem(scene, domain)
 
 
 def geometry_of(problem: Problem) -> PandaGeometry:
-    geometry = problem.values.get(GEOMETRY_KEY)
-    if not isinstance(geometry, PandaGeometry):
-        raise ValueError(
-            f"problem {problem.name}: no Panda geometry in its values (build it from a scene)"
-        )
-    return geometry
+    """The Panda geometry a problem keeps (a ValueError if it was not built from a scene)."""
+    return stored(problem, GEOMETRY_KEY, PandaGeometry, "Panda geometry")
 
 
 def static_context(problem: Problem) -> dict[str, Any]:

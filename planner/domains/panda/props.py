@@ -9,19 +9,16 @@ beyond the table. The meshes are made with :mod:`planner.sim.meshes` and kept in
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
-import numpy as np
 import trimesh
 
+from planner.domains.manipulation.props import tiled_floor
 from planner.domains.panda.geometry import Color, Region, Table
 from planner.sim import meshes as m
 from planner.view import Body, Box, Mesh, Meshes, Rgb
 
-TILE = 0.5  # floor tiles, metres
 FLOOR_MARGIN = 1.0  # the floor reaches this far beyond the table
-TILE_RGB: tuple[Rgb, Rgb] = ((216, 211, 200), (184, 177, 164))
 LEG = 0.05  # the legs' square section, metres
 LEG_INSET = 0.06  # the legs stand this far inside the top's edges
 APRON = 0.08  # the apron under the top is this deep
@@ -122,28 +119,5 @@ def region_body(
 def floor_body(table: Table) -> Body:
     """The tiled floor under the table, FLOOR_MARGIN beyond it, ``table.height`` below its top."""
     (cx, cy), (sx, sy) = table.center, table.size
-    x0 = math.floor((cx - sx / 2 - FLOOR_MARGIN) / TILE)
-    x1 = math.ceil((cx + sx / 2 + FLOOR_MARGIN) / TILE)
-    y0 = math.floor((cy - sy / 2 - FLOOR_MARGIN) / TILE)
-    y1 = math.ceil((cy + sy / 2 + FLOOR_MARGIN) / TILE)
-    parts = []
-    for parity, color in enumerate(TILE_RGB):
-        corners = [
-            (i * TILE, j * TILE)
-            for i in range(x0, x1)
-            for j in range(y0, y1)
-            if (i + j) % 2 == parity
-        ]
-        parts.append(_mesh(f"floor-{parity}", [_tiles(corners)], color))
-    return Body("floor", Meshes(tuple(parts)), (0.0, 0.0, -table.height))
-
-
-def _tiles(corners: Sequence[tuple[float, float]]) -> trimesh.Trimesh:
-    """Square tiles of side TILE at z = 0 facing up, from their lower-left corners."""
-    vertices: list[tuple[float, float, float]] = []
-    faces: list[tuple[int, int, int]] = []
-    for x, y in corners:
-        k = len(vertices)
-        vertices += [(x, y, 0.0), (x + TILE, y, 0.0), (x + TILE, y + TILE, 0.0), (x, y + TILE, 0.0)]
-        faces += [(k, k + 1, k + 2), (k, k + 2, k + 3)]
-    return trimesh.Trimesh(np.array(vertices), np.array(faces), process=False)
+    area = (cx - sx / 2, cx + sx / 2, cy - sy / 2, cy + sy / 2)
+    return tiled_floor(area, FLOOR_MARGIN, _mesh, (0.0, 0.0, -table.height))

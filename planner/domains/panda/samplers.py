@@ -12,27 +12,28 @@ import logging
 import math
 import random
 from collections import Counter
-from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
-from typing import Any
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
 
 import pybullet as p
 
+from planner.domains.manipulation.samplers import BlockSamplers, Reach, with_text
 from planner.domains.panda.geometry import (
     GRID_GAP,
     PLACEMENT_GAP,
     PandaGeometry,
+    Region,
     footprint_half,
     grid_slots,
 )
 from planner.domains.panda.problem import geometry_of
-from planner.domains.panda.robot import LOWER, READY, UPPER, duration, within_limits
 from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
 from planner.domains.panda.world import PandaWorld
 from planner.pddl.structs import Problem
-from planner.sim.motion import MotionConfig, NoPath, plan_joint_motion, seed_ompl
+from planner.robots.panda.model import LOWER, READY, UPPER, duration, within_limits
+from planner.sim.motion import MotionConfig, NoPath, plan_joint_motion
 from planner.sim.transforms import Pose, angle_between, multiply, quat_from_yaw, wrap_angle
-from planner.streams.adapters import Failure, StreamAdapter, StreamContext, from_fn
+from planner.streams.adapters import Failure, StreamAdapter
 
 log = logging.getLogger(__name__)
 
@@ -68,11 +69,7 @@ class SamplerConfig:
 
     def with_text(self, name: str, text: str) -> SamplerConfig:
         """This config with its text or number field ``name`` set from ``text``."""
-        default = getattr(self, name, None)
-        if not isinstance(default, str | int | float):
-            raise ValueError(f"{name!r} is not a text or number field of SamplerConfig")
-        changes: dict[str, Any] = {name: type(default)(text)}
-        return replace(self, **changes)
+        return with_text(self, name, text)
 
 
 def grasp_height(size: tuple[float, float, float]) -> float:
@@ -87,40 +84,15 @@ def tool_target(pose: BlockPose, grasp: Grasp, *, flip: bool = False, lift: floa
     return multiply(block, grasp.tool_in_block(flip))
 
 
-class PandaSamplers:
+class PandaSamplers(BlockSamplers[PandaWorld, BlockPose, Grasp, Conf, Trajectory]):
     """The samplers of one Panda problem, sharing one pybullet world."""
 
     def __init__(
         self, geometry: PandaGeometry, rng: random.Random, config: SamplerConfig = SamplerConfig()
     ) -> None:
+        super().__init__(PandaWorld(geometry), rng, BlockPose, Grasp)
         self.geometry = geometry
-        self.rng = rng
         self.config = config
-        self.world = PandaWorld(geometry)
-        seed_ompl(rng.randrange(1, 2**31))  # OMPL takes one seed per process: the first run's
-
-    def close(self) -> None:
-        self.world.close()
-
-    # --- context -----------------------------------------------------------------------------
-
-    def _apply(self, context: StreamContext | None) -> None:
-        """Put blocks where the context says and close the hand on what it holds."""
-        poses: dict[str, BlockPose] = {}
-        held: tuple[str, Grasp] | None = None
-        if context is not None:
-            for block, pose in context.holds("at-pose"):
-                value = context.values.get(pose)
-                if isinstance(value, BlockPose):
-                    poses[block] = value
-            for block, grasp in context.holds("holding"):
-                value = context.values.get(grasp)
-                if isinstance(value, Grasp):
-                    held = (block, value)
-        self.world.hold(None)
-        self.world.set_blocks(poses)
-        if held is not None:
-            self.world.hold(*held)
 
     # --- streams -----------------------------------------------------------------------------
 
@@ -128,16 +100,17 @@ class PandaSamplers:
         size = self.geometry.block(block).size
         return (Grasp(self.rng.choice(GRASP_YAWS), grasp_height(size)),)
 
-    def sample_placement(
-        self, block: str, region: str, *, context: StreamContext | None = None
-    ) -> tuple[BlockPose] | Failure:
-        self._apply(context)
-        reg = self.geometry.region(region)
-        size = self.geometry.block(block).size
+    def _placement(self, block: str, region: str) -> tuple[BlockPose] | Failure:
+        self.world.hold(None)  # the block is tried where it would stand, not in the hand
+        candidates = self._placements(self.geometry.region(region), self.geometry.block(block).size)
+        return self._free_place(block, candidates, self.config.placement_gap, f"in {region}")
+
+    def _placements(
+        self, reg: Region, size: tuple[float, float, float]
+    ) -> Iterator[BlockPose | None]:
+        """``placement_attempts`` poses drawn in a region (None: a turn that does not fit)."""
         xmin, xmax, ymin, ymax = reg.footprint()
         cfg = self.config
-        self.world.hold(None)  # the block is tried where it would stand, not in the hand
-        poses = dict(self.world.placed)
         for _ in range(cfg.placement_attempts):
             # Mostly square to the region on a grid that starts in its corners and leaves room
             # for a finger between blocks; sometimes anywhere, turned any way.
@@ -149,6 +122,7 @@ class PandaSamplers:
             hx, hy = footprint_half(size, yaw)
             m = cfg.placement_gap
             if xmax - xmin < 2 * (hx + m) or ymax - ymin < 2 * (hy + m):
+                yield None
                 continue
             lo_x, hi_x, lo_y, hi_y = xmin + m + hx, xmax - m - hx, ymin + m + hy, ymax - m - hy
             if grid:  # the grid keeps a finger's room from the rims too
@@ -167,24 +141,10 @@ class PandaSamplers:
                 y = min(hi_y, max(lo_y, y + self.rng.uniform(-cfg.grid_jitter, cfg.grid_jitter)))
             else:
                 x, y = self.rng.uniform(lo_x, hi_x), self.rng.uniform(lo_y, hi_y)
-            pose = BlockPose(x, y, reg.top + size[2] / 2, wrap_angle(yaw))
-            poses[block] = pose
-            self.world.set_blocks(poses)
-            if not self.world.block_collides(block, margin=cfg.placement_gap):
-                return (pose,)
-        return Failure(f"no free place in {region} in {cfg.placement_attempts} tries")
+            yield BlockPose(x, y, reg.top + size[2] / 2, wrap_angle(yaw))
 
-    def inverse_kinematics(
-        self, block: str, pose: BlockPose, grasp: Grasp, *, context: StreamContext | None = None
-    ) -> tuple[Conf] | Failure:
-        self._apply(context)
-        world = self.world
-        placing = world.held is not None and world.held[0] == block
-        placed = dict(world.placed)
-        if not placing:
-            placed[block] = pose  # picking: the block stands at the pose
-        world.hold(None)
-        world.set_blocks(placed)
+    def _inverse_kinematics(self, reach: Reach[BlockPose, Grasp]) -> tuple[Conf] | Failure:
+        block, pose, grasp, placing = reach.block, reach.pose, reach.grasp, reach.placing
         rejected: Counter[str] = Counter()
         for flip in self._flips():
             arm = self.solve_ik(tool_target(pose, grasp, flip=flip))
@@ -309,10 +269,7 @@ class PandaSamplers:
                 return solution
         return None
 
-    def plan_motion(
-        self, q1: Conf, q2: Conf, *, context: StreamContext | None = None
-    ) -> tuple[Trajectory] | Failure:
-        self._apply(context)
+    def _motion(self, q1: Conf, q2: Conf) -> tuple[Trajectory] | Failure:
         world, cfg = self.world, self.config
         holding = world.held[0] if world.held else None
 
@@ -337,10 +294,4 @@ def bindings(
     problem: Problem, rng: random.Random, config: SamplerConfig = SamplerConfig()
 ) -> Mapping[str, StreamAdapter]:
     """The Panda's samplers for ``problem`` (which carries its geometry in ``values``)."""
-    s = PandaSamplers(geometry_of(problem), rng, config)
-    return {
-        "sample-grasp": from_fn(s.sample_grasp),
-        "sample-placement": from_fn(s.sample_placement, context=True),
-        "inverse-kinematics": from_fn(s.inverse_kinematics, context=True),
-        "plan-motion": from_fn(s.plan_motion, context=True),
-    }
+    return PandaSamplers(geometry_of(problem), rng, config).bindings()

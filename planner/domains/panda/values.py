@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from planner.domains.manipulation.problem import UprightPose
 from planner.sim.transforms import Pose, quat_from_euler
 from planner.values import JSON, ValueDecodeError, ValueType, numbers
 
@@ -22,13 +23,8 @@ ARM_DOF = 7
 
 
 @dataclass(frozen=True)
-class BlockPose:
-    """A block standing upright: its centre and its turn about the vertical."""
-
-    x: float
-    y: float
-    z: float
-    yaw: float
+class BlockPose(UprightPose):
+    """A block standing upright on the table, in a tray or on a shelf."""
 
 
 @dataclass(frozen=True)

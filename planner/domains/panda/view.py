@@ -21,18 +21,23 @@ grasp holds it; ``place`` opens the hand and leaves the block at its pose.
 
 from __future__ import annotations
 
-import bisect
+import functools
 import itertools
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any
 
 from planner.abstract.skeleton import GroundAction
-from planner.domains.panda.geometry import PandaGeometry, block_pose_to_pose
-from planner.domains.panda.problem import START_CONF, geometry_of, initial_pose_name
+from planner.domains.manipulation.problem import block_pose_to_pose, start_poses
+from planner.domains.manipulation.timeline import Held, PlanState, PlanTimeline, Playback, lerp
+from planner.domains.manipulation.view import SceneBlocks, block_body, ghosts, last_output
+from planner.domains.panda.geometry import PandaGeometry
+from planner.domains.panda.problem import ROBOT, START_CONF, geometry_of
 from planner.domains.panda.props import floor_body, region_body, rgb, table_body
-from planner.domains.panda.robot import (
+from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
+from planner.pddl.structs import Problem
+from planner.robots.base import step_seconds
+from planner.robots.panda.model import (
     ARM_JOINTS,
     FINGER_JOINTS,
     FINGER_OPEN,
@@ -41,26 +46,10 @@ from planner.domains.panda.robot import (
     VELOCITY,
     finger_joint,
 )
-from planner.domains.panda.values import BlockPose, Conf, Grasp, Trajectory
-from planner.domains.panda.visuals import panda_kinematics, viewer_urdf
-from planner.pddl.structs import Problem
+from planner.robots.panda.visuals import panda_kinematics, viewer_urdf
 from planner.sim.transforms import Pose, invert, multiply
-from planner.view import (
-    ActionSteps,
-    Body,
-    BodyState,
-    Box,
-    Focus,
-    Marker,
-    QueryView,
-    SceneView,
-    Urdf,
-    Vec3,
-)
+from planner.view import Body, BodyState, Box, Focus, Marker, QueryView, SceneView, Urdf, Vec3
 
-T = TypeVar("T")
-
-ROBOT = "panda"  # the robot's body name
 PICKS = ("pick", "pick-obstacle")
 PATH_STEP = 0.1  # radians (largest joint change) between the points of a drawn tool path
 FAILED_ABOVE = 0.06  # a failed query is marked this far above its block, hand or region
@@ -97,12 +86,7 @@ def tool_pose(arm: Sequence[float]) -> Pose:
 
 
 def _initial(problem: Problem, geometry: PandaGeometry) -> dict[str, BlockPose]:
-    out = {}
-    for block in geometry.blocks:
-        pose = problem.values.get(initial_pose_name(block.name))
-        if isinstance(pose, BlockPose):
-            out[block.name] = pose
-    return out
+    return start_poses(problem, [b.name for b in geometry.blocks], BlockPose)
 
 
 def _start_arm(problem: Problem) -> tuple[float, ...]:
@@ -128,10 +112,10 @@ class PandaView:
         bodies = [table_body(table, TABLE_THICKNESS)]
         bodies += [region_body(r, table, fixture_boxes(r)) for r in geometry.regions]
         initial = _initial(problem, geometry)
-        for block in geometry.blocks:
-            pose = initial.get(block.name)
-            position, quat = block_pose_to_pose(pose) if pose else ((0.0, 0.0, 0.0), (0, 0, 0, 1))
-            bodies.append(Body(block.name, Box(block.size), position, quat, rgb(block.color)))
+        bodies += [
+            block_body(b.name, Box(b.size), initial.get(b.name), rgb(b.color))
+            for b in geometry.blocks
+        ]
         joints = robot_joints(_start_arm(problem))
         bodies.append(Body(ROBOT, Urdf(viewer_urdf(), joints)))
         (cx, cy), sx = table.center, table.size[0]
@@ -144,37 +128,9 @@ class PandaView:
 
     def markers(self, query: QueryView, problem: Problem) -> Sequence[Marker]:
         geometry = geometry_of(problem)
-        blocks = {b.name: b for b in geometry.blocks}
-        block = next((v for v in query.inputs if isinstance(v, str) and v in blocks), None)
-        out = []
-        for value in query.outputs:
-            if isinstance(value, BlockPose):
-                size = blocks[block].size if block else geometry.blocks[0].size
-                position, quat = block_pose_to_pose(value)
-                out.append(Marker("placements", "box", position, quat, size, translucent=True))
-            elif isinstance(value, Grasp):
-                initial = _initial(problem, geometry)
-                if block is None or block not in initial:
-                    continue
-                position, quat = multiply(block_pose_to_pose(initial[block]), value.tool_in_block())
-                parts = hand_ghost(_held_width(blocks[block].size, value))  # on its faces
-                out.append(Marker("grasps", "boxes", position, quat, parts=parts, translucent=True))
-            elif isinstance(value, Conf):
-                position, quat = tool_pose(value.arm)
-                out.append(
-                    Marker(
-                        "confs",
-                        "boxes",
-                        position,
-                        quat,
-                        parts=hand_ghost(OPEN_WIDTH),
-                        translucent=True,
-                    )
-                )
-            elif isinstance(value, Trajectory):
-                points = tool_path(value.path)
-                out.append(Marker("motions", "path", points[0], points=points))
-        return out
+        sizes = {b.name: b.size for b in geometry.blocks}
+        blocks = SceneBlocks(sizes, _initial(problem, geometry))
+        return ghosts(query, blocks, functools.partial(_ghost, blocks=blocks))
 
     def failure_at(self, query: QueryView, problem: Problem) -> Vec3 | None:
         geometry = geometry_of(problem)
@@ -203,21 +159,34 @@ class PandaView:
     def focus(self, branch: Sequence[QueryView], problem: Problem) -> Focus:
         """The arm at the last configuration the branch bound: an IK result (the hand at the
         block), or where a motion ends."""
-        arm: tuple[float, ...] | None = None
-        for query in branch:
-            for value in query.outputs:
-                if isinstance(value, Conf):
-                    arm = value.arm
-                elif isinstance(value, Trajectory):
-                    arm = value.path[-1]
-        if arm is None:
+        value = last_output(branch, (Conf, Trajectory))
+        if value is None:
             return Focus()
+        arm = value.arm if isinstance(value, Conf) else value.path[-1]
         return Focus(bodies={ROBOT: BodyState(joints=robot_joints(arm))})
 
     def animate(
         self, actions: Sequence[GroundAction], values: Mapping[str, Any], problem: Problem
     ) -> PandaTimeline:
         return plan_timeline(actions, values, problem)
+
+
+def _ghost(value: Any, block: str | None, *, blocks: SceneBlocks) -> Marker | None:
+    """A grasp's hand outline on the block's faces at its start pose, an IK result's open hand
+    where the configuration puts it, a motion's tool path."""
+    if isinstance(value, Grasp):
+        if block is None:
+            return None
+        parts = hand_ghost(_held_width(blocks.sizes[block], value))  # on its faces
+        return blocks.grasp_ghost(block, value.tool_in_block(), parts)
+    if isinstance(value, Conf):
+        position, quat = tool_pose(value.arm)
+        parts = hand_ghost(OPEN_WIDTH)
+        return Marker("confs", "boxes", position, quat, parts=parts, translucent=True)
+    if isinstance(value, Trajectory):
+        points = tool_path(value.path)
+        return Marker("motions", "path", points[0], points=points)
+    return None
 
 
 def _interpolated(path: Sequence[Sequence[float]], step: float) -> list[tuple[float, ...]]:
@@ -245,92 +214,20 @@ def tool_path(path: Sequence[Sequence[float]]) -> tuple[Vec3, ...]:
 # --- the plan in time --------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Held:
-    """A block in the hand: its pose in the tool frame, and the fingers closed on it."""
-
-    block: str
-    in_tool: Pose
-    fingers: float
-
-
-@dataclass(frozen=True)
-class PlanState:
-    """The arm and the blocks at one moment of a plan."""
-
-    arm: tuple[float, ...]
-    held: Held | None
-    blocks: Mapping[str, BlockPose]  # blocks standing somewhere (not the one in the hand)
-
-
-@dataclass(frozen=True)
-class _Phase:
-    """One move: its waypoints and the second each is reached, from ``start``."""
-
-    start: float
-    seconds: float
-    times: tuple[float, ...]
-    path: tuple[tuple[float, ...], ...]
-    held: Held | None
-    blocks: Mapping[str, BlockPose]
-
-
-class PandaTimeline:
+class PandaTimeline(PlanTimeline[tuple[float, ...]]):
     """The arm's and the blocks' states at every second of a plan (a
-    :class:`~planner.view.Timeline`; :meth:`state_at` gives the Panda's own state)."""
+    :class:`~planner.view.Timeline`; :meth:`state_at` gives the Panda's own state: its
+    configuration is the arm's seven joints)."""
 
-    def __init__(
-        self,
-        phases: Sequence[_Phase],
-        initial: PlanState,
-        final: PlanState,
-        blocks: Sequence[str],
-        steps: ActionSteps | None = None,
-    ) -> None:
-        self._phases = tuple(phases)
-        self.steps = steps  # which action plays when
-        self._starts = [p.start for p in self._phases]
-        self.initial = initial
-        self.final = final
-        self._blocks = tuple(blocks)
-        self._duration = sum(p.seconds for p in self._phases)
+    robot = ROBOT
+    tool_link = TOOL_LINK
 
-    @property
-    def duration(self) -> float:
-        return self._duration
+    def between(self, a: tuple[float, ...], b: tuple[float, ...], f: float) -> tuple[float, ...]:
+        return lerp(a, b, f)
 
-    def state_at(self, t: float) -> PlanState:
-        """The state ``t`` seconds into the plan (clamped to the plan's span)."""
-        if not self._phases or t >= self._duration:
-            return self.final
-        t = max(0.0, t)
-        phase = self._phases[max(0, bisect.bisect_right(self._starts, t) - 1)]
-        local = t - phase.start
-        j = max(0, bisect.bisect_right(phase.times, local) - 1)
-        if j >= len(phase.times) - 1:
-            arm = phase.path[-1]
-        else:
-            t0, t1 = phase.times[j], phase.times[j + 1]
-            f = 0.0 if t1 <= t0 else (local - t0) / (t1 - t0)
-            arm = tuple(
-                a + f * (b - a) for a, b in zip(phase.path[j], phase.path[j + 1], strict=True)
-            )
-        return PlanState(arm, phase.held, phase.blocks)
-
-    def at(self, t: float) -> dict[str, BodyState]:
-        state = self.state_at(t)
+    def robot_state(self, state: PlanState[tuple[float, ...]]) -> BodyState:
         fingers = state.held.fingers if state.held is not None else FINGER_OPEN
-        out = {ROBOT: BodyState(joints=robot_joints(state.arm, fingers))}
-        for name in self._blocks:
-            if state.held is not None and state.held.block == name:
-                position, quat = state.held.in_tool
-                out[name] = BodyState(attached=(ROBOT, TOOL_LINK, position, quat))
-            elif name in state.blocks:
-                position, quat = block_pose_to_pose(state.blocks[name])
-                out[name] = BodyState(position, quat)
-            else:
-                out[name] = BodyState(visible=False)
-        return out
+        return BodyState(joints=robot_joints(state.conf, fingers))
 
 
 def plan_timeline(
@@ -339,69 +236,31 @@ def plan_timeline(
     """Replay a bound plan from the problem's start; ValueError names the action that does not
     fit."""
     geometry = geometry_of(problem)
-    blocks: dict[str, BlockPose] = _initial(problem, geometry)
-    arm = _start_arm(problem)
-    initial = PlanState(arm, None, dict(blocks))
-    held: Held | None = None
-    phases: list[_Phase] = []
-    t = 0.0
+    play = Playback(_start_arm(problem), _initial(problem, geometry))
     known = {**problem.values, **values}  # the start's values (q0, start poses) and the plan's
-    starts: list[float] = []
-    for step, act in enumerate(actions):
-        starts.append(t)
-        args = [known.get(a, a) for a in act.args]
-        where = f"actions[{step}] {act}"
+    for act in play.actions(actions, known):
         if act.name == "move":
-            traj = _arg(args, 2, Trajectory, where)
-            phase = _phase(traj, t, held, dict(blocks))
-            phases.append(phase)
-            t += phase.seconds
-            arm = traj.path[-1]
+            traj = act.arg(2, Trajectory)
+            path = tuple(tuple(q) for q in traj.path)
+            if not path:
+                raise ValueError("a trajectory needs waypoints")
+            weights = [step_seconds(p, q, VELOCITY) for p, q in itertools.pairwise(path)]
+            play.move(path, weights, traj.seconds)
+            play.conf = traj.path[-1]
         elif act.name in PICKS:
             shift = 1 if act.name == "pick-obstacle" else 0
-            block = _arg(args, 0, str, where)
-            pose = blocks.pop(block, None) or _arg(args, 1 + shift, BlockPose, where)
-            grasp = _arg(args, 3 + shift, Grasp, where)
-            conf = _arg(args, 4 + shift, Conf, where)
+            block = act.arg(0, str)
+            pose = play.blocks.pop(block, None) or act.arg(1 + shift, BlockPose)
+            grasp, conf = act.arg(3 + shift, Grasp), act.arg(4 + shift, Conf)
             # The block where the hand at the grasp configuration holds it.
             in_tool = multiply(invert(tool_pose(conf.arm)), block_pose_to_pose(pose))
             width = _held_width(geometry.block(block).size, grasp)
-            held = Held(block, in_tool, finger_joint(width))
-            arm = conf.arm
+            play.take(Held(block, in_tool, finger_joint(width)))
+            play.conf = conf.arm
         elif act.name == "place":
-            blocks[_arg(args, 0, str, where)] = _arg(args, 1, BlockPose, where)
-            held = None
-            arm = _arg(args, 4, Conf, where).arm
+            play.put(act.arg(0, str), act.arg(1, BlockPose))
+            play.conf = act.arg(4, Conf).arm
         else:
-            raise ValueError(f"{where}: unknown action {act.name!r}")
-    final = PlanState(arm, held, dict(blocks))
-    steps = ActionSteps(tuple(starts), tuple(str(a) for a in actions))
-    return PandaTimeline(phases, initial, final, [b.name for b in geometry.blocks], steps)
-
-
-def _arg(args: Sequence[Any], i: int, kind: type[T], where: str) -> T:
-    if i >= len(args) or not isinstance(args[i], kind):
-        raise ValueError(f"{where}: argument {i + 1} is not a {kind.__name__}")
-    value: T = args[i]
-    return value
-
-
-def _phase(
-    traj: Trajectory, start: float, held: Held | None, blocks: Mapping[str, BlockPose]
-) -> _Phase:
-    """Waypoint times of a move: each step takes its share of the trajectory's seconds in
-    proportion to what the joint velocity limits make it take."""
-    path = tuple(tuple(q) for q in traj.path)
-    if not path:
-        raise ValueError("a trajectory needs waypoints")
-    weights = [
-        max(abs(b - a) / v for a, b, v in zip(p, q, VELOCITY, strict=True))
-        for p, q in itertools.pairwise(path)
-    ]
-    total = sum(weights)
-    seconds = max(0.0, traj.seconds)
-    times = [0.0]
-    for i, w in enumerate(weights):
-        share = w / total if total > 0 else 1.0 / len(weights)
-        times.append(seconds if i == len(weights) - 1 else times[-1] + share * seconds)
-    return _Phase(start, seconds, tuple(times), path, held, blocks)
+            raise ValueError(f"{act.where}: unknown action {act.name!r}")
+    blocks = [b.name for b in geometry.blocks]
+    return PandaTimeline(play.phases, play.initial, play.final(), blocks, play.steps())
