@@ -14,7 +14,9 @@ lost two of its parts, which made it another trial. The Panda's trials (baseline
 with its shipped model) were recorded when the domain came in; both learned trials were recorded
 again when the learned planner came to choose stream plans by their estimate
 (``plans_by_estimate``); the Panda's learned trial again when skeletons came on demand from the
-adaptive source and the learned search came to trust only validated streams (issues 52, 53).
+adaptive source and the learned search came to trust only validated streams (issues 52, 53),
+and both Panda trials again when known failures stopped being asked twice (the Panda's IK
+says when the hand is blocked both ways round: ``TreeSearch.memo_exhausted``).
 
 To record a trial afresh after a change that is meant to change it:
 ``python -m tests.search.test_pinned SCENE SEED PLANNER``.
