@@ -59,6 +59,7 @@ from planner.planners import (
 )
 from planner.plans import execution_note, plan_to_dict, validate
 from planner.search.binding import BoundPlan
+from planner.search.bounds import SearchBounds, check_bound, time_reached
 from planner.streams.runtime import QueryResult, StreamRuntime
 
 log = logging.getLogger(__name__)
@@ -77,7 +78,12 @@ __all__ = [
 @dataclass(frozen=True)
 class RunConfig:
     """One run: what to plan, with which planner, how long. Every run is reproducible from its
-    config (and the model file, when it names one)."""
+    config (and the model file, when it names one).
+
+    How long: ``budget_s`` seconds, and optionally ``max_queries`` stream queries a sampler
+    answered and ``max_iterations`` search iterations (:mod:`planner.search.bounds`); the run
+    stops at whichever it reaches first. The counts do not depend on the machine: the same run
+    bounded by them stops at the same point on a laptop, on a cluster or on a busy machine."""
 
     scene: str  # scene name, path to a scene file, or the problem's name (plan(problem))
     seed: int = 0  # draws the scene's random parts and seeds the samplers
@@ -98,11 +104,17 @@ class RunConfig:
     # on demand, replanning on what the search proved) or a top-k planner ("kstar", "symk":
     # the k cheapest at once). A planner spec's "skeletons=..." overrides it.
     skeletons: str = DEFAULT_SOURCE
+    # Bounds that do not depend on the machine (planner.search.bounds); None: unbounded. The
+    # skeleton source's time counts against budget_s only.
+    max_queries: int | None = None  # stream queries a sampler answered (no reused answer)
+    max_iterations: int | None = None  # search iterations (sequential: skeletons tried)
 
     def __post_init__(self) -> None:
         spec = get_planner(self.planner)  # ValueError names what is unknown
         if not 0 < self.budget_s <= 86_400:
             raise ValueError(f"budget must be between 0 and 86400 s, got {self.budget_s}")
+        check_bound("max_queries", self.max_queries)
+        check_bound("max_iterations", self.max_iterations)
         if self.c_explore is not None and not 0.0 <= self.c_explore <= 10.0:
             raise ValueError(f"c_explore must be between 0 and 10, got {self.c_explore}")
         if self.k < 1 or self.attempts < 1 or self.restarts < 1:
@@ -128,6 +140,11 @@ class RunConfig:
         return get_planner(self.planner).default_order
 
     @property
+    def bounds(self) -> SearchBounds:
+        """The run's bounds besides its seconds."""
+        return SearchBounds(self.max_queries, self.max_iterations)
+
+    @property
     def uses_model(self) -> bool:
         """Whether the run loads a cost model (to search with, or to order streams)."""
         spec = get_planner(self.planner)
@@ -149,6 +166,9 @@ class RunResult:
     reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
     # CPU seconds of the search's own thread outside the stream queries (tree searches only)
     search_cpu_s: float | None = None
+    # Which bound ended a run that timed out: "time budget of 300 s reached", "query budget of
+    # 500 reached", "iteration budget of 200 reached"; None for any other status.
+    ended_by: str | None = None
 
     @property
     def solved(self) -> bool:
@@ -201,7 +221,7 @@ class PlanResult:
         streams asked again (:func:`planner.plans.validate`); ``None`` without a plan."""
         bound = self.result.bound
         if bound is None:
-            return None, f"no plan ({self.result.status})"
+            return None, f"no plan ({self.result.ended_by or self.result.status})"
         if self.valid is not None:
             return self.valid, self.message
         report: PlanCheck = validate(
@@ -248,8 +268,9 @@ def plan(
     """Plan ``scene`` (a scene name or path, or a ``Problem`` of ``domain``) with ``planner``.
 
     ``options`` are the other :class:`RunConfig` fields (``k``, ``order``, ``c_explore``,
-    ``attempts``, ``restarts``, ``priors_db``); an unknown one raises ``TypeError``. Events go
-    to ``sink`` (a fresh :class:`~planner.events.ListSink` when None).
+    ``attempts``, ``restarts``, ``priors_db``, ``max_queries``, ``max_iterations``); an unknown
+    one raises ``TypeError``. Events go to ``sink`` (a fresh :class:`~planner.events.ListSink`
+    when None).
     """
     names = {f.name for f in fields(RunConfig)} - {"scene", "seed", "planner", "budget_s"}
     unknown = sorted(set(options) - names)
@@ -391,7 +412,18 @@ def _solve(
         first = source.request(first_n)
     except PlannerTimeoutError:  # the budget ran out before the first skeleton
         elapsed = time.perf_counter() - start
-        timeout = RunResult(run_id, config, "timeout", None, elapsed, elapsed, None, None, [])
+        timeout = RunResult(
+            run_id,
+            config,
+            "timeout",
+            None,
+            elapsed,
+            elapsed,
+            None,
+            None,
+            [],
+            ended_by=time_reached(config.budget_s) + " before the first skeleton",
+        )
         return PlanResult(timeout, loaded, problem)
     initial: dict[str, Any] = {o.name: o.name for o in problem.objects}
     initial.update(problem.values)
@@ -412,8 +444,11 @@ def _solve(
     # the search alone (its own seconds and its queries'; docs/BENCHMARKS.md splits them).
     task.runtime = runtime if runtime is not None else loaded.runtime(problem, seed=config.seed)
     emitter.emit(AbstractPlansFound, plans=plan_summaries(task.plans), seconds=first.seconds)
-    budget = Budget(start, start + config.budget_s, progress, should_stop)
+    budget = Budget(start, start + config.budget_s, progress, should_stop, config.bounds)
     outcome = planner.solve(task, emitter, budget)
+    ended_by = outcome.ended_by
+    if outcome.status == "timeout" and ended_by is None:
+        ended_by = time_reached(config.budget_s)
     result = RunResult(
         run_id,
         config,
@@ -427,5 +462,6 @@ def _solve(
         outcome.nodes,
         outcome.reused,
         outcome.search_cpu_s,
+        ended_by,
     )
     return PlanResult(result, loaded, problem, task.runtime)

@@ -29,6 +29,7 @@ from planner.experiment import (
 )
 from planner.planners import PRIORS, get_planner
 from planner.runs import ORDERS, PLANNERS, RunConfig
+from planner.search.bounds import check_bound
 from planner.store import BenchTrialRecord, RunStore
 
 log = logging.getLogger(__name__)
@@ -50,6 +51,9 @@ class BenchConfig:
     model: str | None = None  # model file of the learned planner (default: the domain's own)
     order: str = "auto"  # stream order of every planner (RunConfig.order)
     domain: str | None = None  # the domain's name or folder (RunConfig.domain)
+    # Each trial's bounds besides its seconds (RunConfig.max_queries, max_iterations)
+    max_queries: int | None = None
+    max_iterations: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -60,6 +64,8 @@ class BenchConfig:
             "model": self.model,
             "order": self.order,
             "domain": self.domain,
+            "max_queries": self.max_queries,
+            "max_iterations": self.max_iterations,
         }
 
     @classmethod
@@ -72,12 +78,19 @@ class BenchConfig:
             model=data.get("model"),
             order=str(data.get("order", "auto")),  # benchmarks before --order: auto
             domain=data.get("domain"),
+            # benchmarks before --max-queries and --max-iterations: seconds only
+            max_queries=_optional_int(data.get("max_queries")),
+            max_iterations=_optional_int(data.get("max_iterations")),
         )
 
     def uses_model(self, planner: str) -> bool:
         """Does ``planner`` load the model in this benchmark (to search, or to order)?"""
         spec = get_planner(planner)
         return spec.uses_model or (self.order == "model" and spec.kind.name != "sequential")
+
+
+def _optional_int(value: Any) -> int | None:
+    return None if value is None else int(value)
 
 
 def make_config(
@@ -90,9 +103,13 @@ def make_config(
     model: str | None = None,
     order: str = "auto",
     domain: str | None = None,
+    max_queries: int | None = None,
+    max_iterations: int | None = None,
 ) -> BenchConfig:
     """A checked configuration; :class:`BenchError` names what is wrong. A learned planner with
-    no ``model`` takes the domain's own model, or runs on per-stream priors when it has none."""
+    no ``model`` takes the domain's own model, or runs on per-stream priors when it has none.
+    ``max_queries`` and ``max_iterations`` bound each trial besides its seconds
+    (:mod:`planner.search.bounds`)."""
     names = tuple(p.strip() for p in planners if p.strip())
     unknown = []
     for p in names:
@@ -115,6 +132,11 @@ def make_config(
         raise BenchError(f"--budget must be in (0, {MAX_BUDGET_S:.0f}] seconds, got {budget_s}")
     if order not in ORDERS:
         raise BenchError(f"--order must be one of {', '.join(ORDERS)}, got {order!r}")
+    for flag, bound in (("--max-queries", max_queries), ("--max-iterations", max_iterations)):
+        try:
+            check_bound(flag, bound)
+        except ValueError as exc:
+            raise BenchError(str(exc)) from None
     needs_model = any(get_planner(p).uses_model for p in names) or order == "model"
     if model is not None and not needs_model:
         raise BenchError(
@@ -131,6 +153,8 @@ def make_config(
         model,
         order,
         domain,
+        max_queries,
+        max_iterations,
     )
 
 
@@ -145,7 +169,12 @@ def check(config: BenchConfig) -> dict[str, Any]:
     for planner in config.planners:
         try:
             RunConfig(
-                scene=config.scene, planner=planner, budget_s=config.budget_s, order=config.order
+                scene=config.scene,
+                planner=planner,
+                budget_s=config.budget_s,
+                order=config.order,
+                max_queries=config.max_queries,
+                max_iterations=config.max_iterations,
             )
         except ValueError as exc:
             raise BenchError(f"{planner}: {exc}") from None
@@ -240,7 +269,15 @@ def trial_order(config: BenchConfig) -> list[Trial]:
             model = get_planner(planner).model or model  # "learned:model=priors"
             out.append(
                 Trial(
-                    config.scene, seed, planner, config.budget_s, model, config.order, config.domain
+                    config.scene,
+                    seed,
+                    planner,
+                    config.budget_s,
+                    model,
+                    config.order,
+                    config.domain,
+                    config.max_queries,
+                    config.max_iterations,
                 )
             )
     return out

@@ -100,6 +100,35 @@ def _positive(text: str) -> float:
     return value
 
 
+def _bound(text: str) -> int:
+    """A bound on queries or iterations: a positive whole number."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {value}")
+    return value
+
+
+def _add_bounds(parser: argparse.ArgumentParser, per: str) -> None:
+    """--max-queries and --max-iterations (RunConfig.max_queries, max_iterations)."""
+    parser.add_argument(
+        "--max-queries",
+        type=_bound,
+        metavar="N",
+        help=f"stop {per} after N stream queries a sampler answered, whatever the seconds: the "
+        "same point on any machine (default: no bound; --budget still applies)",
+    )
+    parser.add_argument(
+        "--max-iterations",
+        type=_bound,
+        metavar="N",
+        help=f"stop {per} after N search iterations (sequential: skeletons tried), whatever "
+        "the seconds (default: no bound)",
+    )
+
+
 DOMAIN_HELP = (
     "the domain: an installed domain's name or the path of a domain folder "
     '(default: the scene file\'s "domain")'
@@ -170,6 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
         "failed; kstar, symk: the k cheapest at once)",
     )
     pl.add_argument("--budget", type=_positive, default=300.0, help="seconds (default 300)")
+    _add_bounds(pl, "the run")
     pl.add_argument("--out", type=Path, help="write the bound plan here (JSON)")
     pl.add_argument("--json", action="store_true", help="machine-readable summary")
     pl.add_argument("--db", type=_store, help="record the run in this store (default: user data)")
@@ -200,6 +230,7 @@ def build_parser() -> argparse.ArgumentParser:
     co.add_argument("--trials", type=_count, default=100, help="number of seeds (default 100)")
     co.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
     co.add_argument("--budget", type=_positive, default=300.0, help="seconds per trial")
+    _add_bounds(co, "each trial")
     co.add_argument("--workers", type=_count, default=2, help="processes (default 2)")
     co.add_argument("--db", type=_store, required=True, help="store to record into")
     co.add_argument("--model", help="model file for --planner learned")
@@ -220,6 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--trials", type=int, default=20, help="seeds (default 20)")
     be.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")
     be.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
+    _add_bounds(be, "each trial")
     be.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
     be.add_argument(
         "--model",
@@ -255,6 +287,7 @@ def build_parser() -> argparse.ArgumentParser:
     ho.add_argument("--trials", type=int, default=20, help="seeds per scene (default 20)")
     ho.add_argument("--seed-start", type=int, default=1000, help="first seed (default 1000)")
     ho.add_argument("--budget", type=float, default=300.0, help="seconds per trial")
+    _add_bounds(ho, "each trial")
     ho.add_argument("--workers", type=_count, default=2, help="trials at once (default 2)")
     ho.add_argument("--model", help="model file for the learned planner (default: the domain's)")
     ho.add_argument("--db", type=_store, help=STORE_HELP)
@@ -508,6 +541,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         if args.model == PRIORS or (args.model is None and loaded.spec.model is None)
         else None,
         skeletons=args.skeletons,
+        max_queries=args.max_queries,
+        max_iterations=args.max_iterations,
     )
     preload_libraries(config)
     progress = _progress_line()
@@ -593,9 +628,25 @@ def cmd_collect(args: argparse.Namespace) -> int:
     # A bad scene fails before any trial starts.
     loaded, _ = problem_for_scene(args.scene, domain=args.domain)
     domain = _domain_ref(loaded, args.domain)
-    RunConfig(scene=args.scene, planner=args.planner, budget_s=args.budget, model=args.model)
+    RunConfig(
+        scene=args.scene,
+        planner=args.planner,
+        budget_s=args.budget,
+        model=args.model,
+        max_queries=args.max_queries,
+        max_iterations=args.max_iterations,
+    )
     trials = [
-        Trial(args.scene, seed, args.planner, args.budget, args.model, domain=domain)
+        Trial(
+            args.scene,
+            seed,
+            args.planner,
+            args.budget,
+            args.model,
+            domain=domain,
+            max_queries=args.max_queries,
+            max_iterations=args.max_iterations,
+        )
         for seed in range(args.seed_start, args.seed_start + args.trials)
     ]
     results = run_trials(trials, args.db, workers=args.workers, progress=stderr_progress)
@@ -634,6 +685,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
             model=args.model,
             order=args.order,
             domain=_domain_ref(loaded, args.domain),
+            max_queries=args.max_queries,
+            max_iterations=args.max_iterations,
         )
     bench_id, results = run_bench(
         db,
@@ -675,6 +728,8 @@ def cmd_horizon(args: argparse.Namespace) -> int:
         "budget_s": args.budget,
         "model": args.model,
         "domain": args.domain,
+        "max_queries": args.max_queries,
+        "max_iterations": args.max_iterations,
     }
     if args.no_run:
         ids = []

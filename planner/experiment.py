@@ -37,6 +37,8 @@ class Trial:
     model: str | None = None  # model file, for learned planners (and --order model)
     order: str = "auto"  # stream order (RunConfig.order)
     domain: str | None = None  # the domain's name or folder (RunConfig.domain)
+    max_queries: int | None = None  # RunConfig.max_queries
+    max_iterations: int | None = None  # RunConfig.max_iterations
 
 
 @dataclass(frozen=True)
@@ -104,6 +106,8 @@ def run_trial(trial: Trial, db: str, run_id: str | None = None) -> TrialResult:
         domain=trial.domain,
         # A learned trial with no model for its domain runs on the priors of this store.
         priors_db=db if trial.model in (None, PRIORS) else None,
+        max_queries=trial.max_queries,
+        max_iterations=trial.max_iterations,
     )
     preload_libraries(config)
     run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config), run_id=run_id)

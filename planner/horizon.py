@@ -131,6 +131,8 @@ def run_horizon(
     budget_s: float,
     model: str | None = None,
     domain: str | None = None,
+    max_queries: int | None = None,
+    max_iterations: int | None = None,
     workers: int = 2,
     ray_address: str | None = None,
     progress: Callable[[str], None] | None = None,
@@ -147,6 +149,8 @@ def run_horizon(
             budget_s=budget_s,
             model=model,
             domain=domain,
+            max_queries=max_queries,
+            max_iterations=max_iterations,
         )
         for s in scenes
     ]

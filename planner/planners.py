@@ -52,6 +52,7 @@ from planner.search.binding import (
     shared_states,
     stream_contexts,
 )
+from planner.search.bounds import SearchBounds
 from planner.search.feedback import InstanceRecords
 from planner.search.learned import (
     LearnedConfig,
@@ -163,16 +164,19 @@ class PlannerOutcome:
     nodes: int  # tree nodes (tree searches) or skeletons tried (sequential)
     reused: int = 0  # successes taken from an identical earlier query (not in ``queries``)
     search_cpu_s: float | None = None  # the search thread's CPU outside queries (tree searches)
+    ended_by: str | None = None  # the count bound that ended it (SearchBounds.reached)
 
 
 @dataclass(frozen=True)
 class Budget:
-    """When to stop: the run's start and deadline (perf_counter seconds) and who may stop it."""
+    """When to stop: the run's start and deadline (perf_counter seconds), its bounds on queries
+    and iterations (:mod:`planner.search.bounds`) and who may stop it."""
 
     start: float
     deadline: float
     progress: Callable[[str], None] | None = None
     should_stop: Callable[[], bool] | None = None
+    bounds: SearchBounds = field(default_factory=SearchBounds)
 
 
 class Planner(ABC):
@@ -342,7 +346,7 @@ class _TreeSearchPlanner(Planner):
             fluent_streams=fluent_streams,
             doubt_after=task.doubt_after,
         )
-        outcome = search.run(deadline=budget.deadline, start=budget.start)
+        outcome = search.run(deadline=budget.deadline, start=budget.start, bounds=budget.bounds)
         queries = [r for _, r in outcome.queries if not r.reused]
         reused = sum(1 for _, r in outcome.queries if r.reused)
         bound = None
@@ -364,6 +368,7 @@ class _TreeSearchPlanner(Planner):
             len(search.tree),
             reused,
             outcome.search_cpu_s,
+            outcome.ended_by,
         )
 
 
@@ -525,6 +530,10 @@ MAX_BATCH = 400  # skeletons in one request at most, however often the search as
 
 
 class SequentialPlanner(Planner):
+    """Binds each skeleton in turn (:func:`~planner.search.binding.bind_sequentially`). Its
+    iterations (``Budget.bounds``) are the skeletons it tried; the budget is checked before
+    every query, so a run stops within a skeleton too."""
+
     name = "sequential"
 
     def solve(self, task: PlanningTask, emitter: Emitter, budget: Budget) -> PlannerOutcome:
@@ -533,6 +542,8 @@ class SequentialPlanner(Planner):
         queries: list[QueryResult] = []
         bound: BoundPlan | None = None
         tried = 0
+        answered = 0  # queries so far, those of the skeleton being bound included
+        ended_by: str | None = None
         fluent_streams = frozenset(s.name for s in task.loaded.streams.streams if s.fluents)
         records = InstanceRecords(doubt_after=task.doubt_after, fluent_streams=fluent_streams)
         feed = None
@@ -547,8 +558,17 @@ class SequentialPlanner(Planner):
             context: StreamContext,
             result: QueryResult,
         ) -> None:
+            nonlocal answered
+            answered += 1
             records.record(inst, result)
             recorder.queried(restart, i, inst, inputs, context, result)
+
+        def spent() -> bool:
+            return (
+                time.perf_counter() > budget.deadline
+                or budget.bounds.queries_reached(answered)
+                or (budget.should_stop is not None and budget.should_stop())
+            )
 
         index = 0
         while True:
@@ -556,13 +576,16 @@ class SequentialPlanner(Planner):
                 break
             if budget.should_stop is not None and budget.should_stop():
                 return PlannerOutcome("cancelled", None, None, None, queries, tried)
+            ended_by = budget.bounds.reached(answered, tried)
+            if ended_by is not None:
+                break
             if index == len(plans):  # every skeleton tried: more, planned on what failed
                 feedback = records.feedback()
                 if feed is not None and not feed.exhausted_for(feedback):
                     plans += [p for p, _ in feed.more("all tried", feedback)]
                     continue
-                if not plans:
-                    break
+                if not plans:  # no skeleton at all: nothing to bind, whatever the budget
+                    return PlannerOutcome("failed", None, None, None, queries, tried)
                 index = 0  # nothing new: another round over the skeletons, with new samples
             plan = plans[index]
             tried += 1
@@ -575,6 +598,7 @@ class SequentialPlanner(Planner):
                 attempts=self.config.attempts,
                 restarts=self.config.restarts,
                 observe=observe,
+                stop=spent,
             )
             queries += made
             index += 1
@@ -587,7 +611,9 @@ class SequentialPlanner(Planner):
             )
             oracle_s = recorder.solved(execution_s, skeleton_seconds(task))
         status = "solved" if bound is not None else "timeout"
-        return PlannerOutcome(status, bound, execution_s, oracle_s, queries, tried)
+        return PlannerOutcome(
+            status, bound, execution_s, oracle_s, queries, tried, ended_by=ended_by
+        )
 
 
 class _SequentialRecorder:

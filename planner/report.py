@@ -28,6 +28,17 @@ BOOTSTRAP = 5000  # resamples for the intervals
 MEASURES = ("planning", "execution", "total")
 
 
+def _count_bounds(config: dict[str, Any]) -> str:
+    """The trials' bounds besides their seconds, as the report's header says them ("" when
+    none: every benchmark before them)."""
+    parts = [
+        f"{config[key]} {what}"
+        for key, what in (("max_queries", "queries"), ("max_iterations", "iterations"))
+        if config.get(key) is not None
+    ]
+    return f" or {' or '.join(parts)}" if parts else ""
+
+
 def _times(t: BenchTrialRecord, budget: float) -> dict[str, float]:
     if t.status == "solved" and t.planning_s is not None:
         execution = t.execution_s or 0.0
@@ -550,8 +561,8 @@ def render_html(summary: dict[str, Any]) -> str:
     head = (
         f"<h1>Benchmark {html.escape(summary['bench_id'])}</h1>"
         f"<p>{html.escape(config['scene'])}, planners {html.escape(', '.join(planners))}, "
-        f"{len(seeds)} seeds ({min(seeds)}-{max(seeds)}), budget {budget:.0f} s per trial, "
-        f"stream order {html.escape(str(config.get('order', 'auto')))}; "
+        f"{len(seeds)} seeds ({min(seeds)}-{max(seeds)}), budget {budget:.0f} s per trial"
+        f"{_count_bounds(config)}, stream order {html.escape(str(config.get('order', 'auto')))}; "
         f"status {html.escape(summary['status'])}; started {summary['created_at']}"
         + (f", wall time {summary['wall_s'] / 60:.1f} min" if summary["wall_s"] else "")
         + "</p>"

@@ -118,9 +118,11 @@ def bind_sequentially(
     attempts: int = 10,
     restarts: int = 5,
     observe: QueryObserver | None = None,
+    stop: Callable[[], bool] | None = None,
 ) -> tuple[BoundPlan | None, list[QueryResult]]:
     """Bind ``plan`` by querying its streams in order; return the bound plan (or ``None``) and
-    every query made (each also told to ``observe`` as it is made)."""
+    every query made (each also told to ``observe`` as it is made). ``stop`` is asked before
+    each query: when it says so, the binding ends there with no plan (a run's budget spent)."""
     if attempts < 1 or restarts < 1:
         raise ValueError("attempts and restarts must be at least 1")
     contexts = stream_contexts(plan, domain, problem)
@@ -133,6 +135,8 @@ def bind_sequentially(
             inputs = tuple(values[name] for name in inst.inputs)
             context = StreamContext(state, values)
             for _ in range(attempts):
+                if stop is not None and stop():
+                    return None, queries
                 result = runtime.query(
                     inst.stream, inputs, key=(restart, inst.stream, inst.inputs), context=context
                 )

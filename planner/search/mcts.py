@@ -1,7 +1,11 @@
 """The tree search over stream bindings: selection, expansion, simulation, back-propagation.
 
-The loop is here; what it selects is decided by a :class:`Policy` (the eTAMP baseline now, the
-learned policy later). Every step is reported as an event (:mod:`planner.events`).
+The loop is here (:class:`TreeSearch`); what it selects is decided by a :class:`Policy`: eTAMP's
+progressive widening (:class:`BaselinePolicy`) or the learned policy
+(:class:`planner.search.learned.LearnedPolicy`, the planners ``paper`` and ``learned``). A search
+ends when a plan is fully bound, every stream plan is exhausted, its deadline passes, a bound on
+its queries or iterations is reached (:mod:`planner.search.bounds`), or its caller stops it.
+Every step is reported as an event (:mod:`planner.events`).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from planner.search.baseline import (
     success_value,
     ucb,
 )
+from planner.search.bounds import SearchBounds
 from planner.search.feedback import InstanceKey, InstanceRecords
 from planner.search.queries import query_context, query_identity, remembered
 from planner.search.reuse import reusable_streams
@@ -185,6 +190,9 @@ class SearchResult:
     # policy's features and predictions, events. Unlike wall seconds, a busy machine's other
     # processes do not add to it.
     search_cpu_s: float = 0.0
+    # Which count bound ended it ("query budget of 500 reached"); None otherwise (a deadline
+    # that passed included: the caller knows the seconds it set).
+    ended_by: str | None = None
 
     @property
     def solved(self) -> bool:
@@ -316,6 +324,10 @@ class TreeSearch:
         self._last_progress = 0.0
         self._plans_open = 0  # stream plans given a node under the root so far
         self._query_cpu_s = 0.0  # CPU seconds of the queries the runtime answered (this thread's)
+        # What the search's bounds count (planner.search.bounds), over every run() call: the
+        # queries a sampler answered (no reused answer) and the loop's iterations.
+        self.answered = 0
+        self.iterations = 0
 
     # --- events ------------------------------------------------------------------------------
 
@@ -416,6 +428,7 @@ class TreeSearch:
             result = self.runtime.query(
                 inst.stream, inputs, key=(node.id, inst.stream), context=context
             )
+            self.answered += 1
             self._query_cpu_s += result.cpu_s  # this thread's: the runtime's clock
         outputs = (
             dict(zip(inst.outputs, result.outputs, strict=True))
@@ -583,16 +596,24 @@ class TreeSearch:
 
     # --- the loop ----------------------------------------------------------------------------
 
-    def run(self, *, deadline: float, start: float | None = None) -> SearchResult:
-        """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, or stop. A
-        second call goes on with the same tree (no stream plan is opened twice).
+    def run(
+        self,
+        *,
+        deadline: float,
+        start: float | None = None,
+        bounds: SearchBounds | None = None,
+    ) -> SearchResult:
+        """Search until a plan is fully bound, ``deadline`` (perf_counter) passes, one of
+        ``bounds`` is reached (queries a sampler answered, iterations: counted over every call,
+        status ``timeout`` and ``ended_by`` saying which), or stop. A second call goes on with
+        the same tree (no stream plan is opened twice).
 
         While it runs, Python's cyclic garbage collector leaves alone the objects that existed
         before (:func:`young_objects_only`)."""
         with young_objects_only():
-            return self._run(deadline=deadline, start=start)
+            return self._run(deadline=deadline, start=start, bounds=bounds or SearchBounds())
 
-    def _run(self, *, deadline: float, start: float | None) -> SearchResult:
+    def _run(self, *, deadline: float, start: float | None, bounds: SearchBounds) -> SearchResult:
         start = time.perf_counter() if start is None else start
         cpu_start, query_cpu_start = time.thread_time(), self._query_cpu_s
         first = min(self.policy.initial_plans(len(self.skeletons)), len(self.skeletons))
@@ -600,6 +621,7 @@ class TreeSearch:
             self.open_plan(self._plans_open)
         iterations = 0
         status: Status = "timeout"
+        ended_by: str | None = None
         solution: Node | None = None
         while True:
             if time.perf_counter() >= deadline:
@@ -608,7 +630,12 @@ class TreeSearch:
             if self.should_stop is not None and self.should_stop():
                 status = "cancelled"
                 break
+            ended_by = bounds.reached(self.answered, self.iterations)
+            if ended_by is not None:
+                status = "timeout"
+                break
             iterations += 1
+            self.iterations += 1
             tree = self.tree
             closed = self._plans_open < len(self.skeletons)
             live = tree.live_children(ROOT)
@@ -636,7 +663,7 @@ class TreeSearch:
                 elif not node.exhausted and self.policy.expand(tree, node):
                     child = self.query(node)
                     while child.success and not self._complete(child):
-                        if time.perf_counter() >= deadline:
+                        if time.perf_counter() >= deadline or bounds.queries_reached(self.answered):
                             break
                         child = self.query(child)  # simulation: bind what follows once
                     leaf = child
@@ -655,7 +682,16 @@ class TreeSearch:
         own_cpu = time.thread_time() - cpu_start - (self._query_cpu_s - query_cpu_start)
         if solution is None:
             return SearchResult(
-                status, None, None, {}, self.queries, iterations, seconds, 0.0, max(own_cpu, 0.0)
+                status,
+                None,
+                None,
+                {},
+                self.queries,
+                iterations,
+                seconds,
+                0.0,
+                max(own_cpu, 0.0),
+                ended_by,
             )
         branch = set(self.tree.path(solution.id))
         oracle = sum(self.tree[i].query_wall_s for i in branch)
