@@ -136,6 +136,8 @@ def _field_of(error: str) -> str:
         ("--budget", "budget_s"),
         ("--model", "model"),
         ("--order", "order"),
+        ("--max-queries", "max_queries"),
+        ("--max-iterations", "max_iterations"),
         ("trained on", "seed_start"),
     ):
         if flag in error:
@@ -259,12 +261,24 @@ class BenchService:
         model: str | None,
         workers: int,
         order: str = "auto",
+        max_queries: int | None = None,
+        max_iterations: int | None = None,
     ) -> BenchInfo:
         """Check, record and start a benchmark; :class:`RequestError` names the bad field,
         :class:`BusyError` when the dashboard already runs as many as it may."""
         from planner.learning.model import ModelError  # torch: only once a benchmark starts
 
-        config = self._config(scene, planners, trials, seed_start, budget_s, model, order)
+        config = self._config(
+            scene,
+            planners,
+            trials,
+            seed_start,
+            budget_s,
+            model,
+            order,
+            max_queries=max_queries,
+            max_iterations=max_iterations,
+        )
         with self._lock:
             self._check_room()
             try:
@@ -288,6 +302,9 @@ class BenchService:
         budget_s: float,
         model: str | None,
         order: str,
+        *,
+        max_queries: int | None = None,
+        max_iterations: int | None = None,
     ) -> BenchConfig:
         try:
             info = self.domains.scene(scene)
@@ -327,6 +344,8 @@ class BenchService:
                 model=path,
                 order=order,
                 domain=info.domain_ref,
+                max_queries=max_queries,
+                max_iterations=max_iterations,
             )
         except BenchError as exc:
             raise RequestError(_field_of(str(exc)), str(exc)) from exc

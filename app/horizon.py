@@ -117,24 +117,27 @@ class _Settings:
     budget_s: float
     model: str | None  # the model file as the benchmark recorded it
     order: str
+    # each trial's bounds besides its seconds (BenchConfig.max_queries, max_iterations)
+    max_queries: int | None = None
+    max_iterations: int | None = None
 
     @property
     def model_name(self) -> str | None:
         return None if self.model is None else Path(self.model).stem
 
     def key(self) -> str:
-        text = repr(
-            (
-                self.domain,
-                self.planners,
-                self.trials,
-                self.seed_start,
-                self.budget_s,
-                self.model,
-                self.order,
-            )
+        fields: tuple[Any, ...] = (
+            self.domain,
+            self.planners,
+            self.trials,
+            self.seed_start,
+            self.budget_s,
+            self.model,
+            self.order,
         )
-        return hashlib.sha1(text.encode()).hexdigest()[:12]
+        if self.max_queries is not None or self.max_iterations is not None:
+            fields += (self.max_queries, self.max_iterations)  # a series without keeps its key
+        return hashlib.sha1(repr(fields).encode()).hexdigest()[:12]
 
     def label(self) -> str:
         text = (
@@ -144,6 +147,10 @@ class _Settings:
             text += f", model {self.model_name}"
         if self.order != "auto":
             text += f", order {self.order}"
+        if self.max_queries is not None:
+            text += f", {self.max_queries} queries"
+        if self.max_iterations is not None:
+            text += f", {self.max_iterations} iterations"
         return text
 
 
@@ -249,6 +256,8 @@ class Horizon:
                 budget_s=config.budget_s,
                 model=config.model,
                 order=config.order,
+                max_queries=config.max_queries,
+                max_iterations=config.max_iterations,
             )
             scenes = groups.setdefault(settings, {})
             kept = scenes.get(config.scene)

@@ -14,6 +14,7 @@ PlannerName = Literal["baseline", "paper", "learned", "sequential"]
 StatusName = Literal["queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted"]
 
 MAX_SEQ = 2**31 - 1  # event numbers and steps: far more than any run has
+MAX_BOUND = 2**31 - 1  # a run's bound on queries or iterations: far more than any run makes
 
 # Request bodies: no unknown fields, no coercion ("0" is not a number, true is not 1), finite
 # numbers only, so the OpenAPI schema says exactly what the server accepts.
@@ -60,6 +61,20 @@ class RunRequest(BaseModel):
     budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
     model: ModelName | None = None
     k: Integer = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
+    max_queries: Integer | None = Field(
+        None,
+        ge=1,
+        le=MAX_BOUND,
+        description="stop after this many stream queries a sampler answered, whatever the "
+        "seconds (the same point on any machine); none: budget_s alone",
+    )
+    max_iterations: Integer | None = Field(
+        None,
+        ge=1,
+        le=MAX_BOUND,
+        description="stop after this many search iterations (sequential: skeletons tried), "
+        "whatever the seconds; none: budget_s alone",
+    )
 
 
 class Run(BaseModel):
@@ -361,6 +376,12 @@ class BenchRequest(BaseModel):
     model: ModelName | None = Field(None, description="the learned planners' model by name")
     workers: Integer = Field(2, ge=1, le=16, description="trials at once")
     order: Literal["auto", "plan", "model"] = "auto"
+    max_queries: Integer | None = Field(
+        None, ge=1, le=MAX_BOUND, description="each trial's bound on stream queries (RunRequest)"
+    )
+    max_iterations: Integer | None = Field(
+        None, ge=1, le=MAX_BOUND, description="each trial's bound on search iterations"
+    )
 
 
 class ResumeRequest(BaseModel):

@@ -106,7 +106,16 @@ class Dashboard:
     # --- runs ---------------------------------------------------------------------------------
 
     def launch(
-        self, scene: str, planner: str, seed: int, budget_s: float, model: str | None, k: int
+        self,
+        scene: str,
+        planner: str,
+        seed: int,
+        budget_s: float,
+        model: str | None,
+        k: int,
+        *,
+        max_queries: int | None = None,
+        max_iterations: int | None = None,
     ) -> RunRecord:
         try:
             scene_info = self.domains.scene(scene)
@@ -143,6 +152,8 @@ class Dashboard:
             domain=scene_info.domain_ref,
             # Learned with no model for the domain: priors from the runs stored here.
             priors_db=db if learned and model_path is None else None,
+            max_queries=max_queries,
+            max_iterations=max_iterations,
         )
         data = asdict(config)
         if model_path is not None:

@@ -48,6 +48,7 @@ const el = {
   planner: $("launch-planner"),
   seed: $("launch-seed"),
   budget: $("launch-budget"),
+  maxQueries: $("launch-max-queries"),
   modelField: $("launch-model-field"),
   model: $("launch-model"),
   submit: $("launch-submit"),
@@ -328,6 +329,7 @@ el.form.addEventListener("submit", async (e) => {
     budget_s: el.budget.value === "" ? 120 : Number(el.budget.value),
   };
   if (usesModel(body.planner) && el.model.value) body.model = el.model.value;
+  if (el.maxQueries.value !== "") body.max_queries = Number(el.maxQueries.value);
   el.submit.disabled = true;
   el.submit.textContent = "Launching…";
   try {

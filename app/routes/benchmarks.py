@@ -46,6 +46,8 @@ def launch(body: BenchRequest, dash: Dash) -> BenchOut:
             model=body.model,
             workers=body.workers,
             order=body.order,
+            max_queries=body.max_queries,
+            max_iterations=body.max_iterations,
         )
     except RequestError as exc:
         raise bad_field(exc.field, str(exc)) from exc

@@ -101,6 +101,12 @@ def test_catalogs_and_health(client: TestClient) -> None:
         ({"scene": "line-2", "budget_s": True}, "budget_s", "valid number"),
         ({"scene": "line-2", "budget_s": "30"}, "budget_s", "valid number"),
         ({"scene": 7}, "scene", "valid string"),
+        ({"scene": "line-2", "max_queries": 0}, "max_queries", "greater than or equal"),
+        ({"scene": "line-2", "max_queries": "500"}, "max_queries", "valid integer"),
+        ({"scene": "line-2", "max_queries": 2**31}, "max_queries", "less than or equal"),
+        ({"scene": "line-2", "max_iterations": -1}, "max_iterations", "greater than or equal"),
+        ({"scene": "line-2", "max_iterations": 2.5}, "max_iterations", "valid integer"),
+        ({"scene": "line-2", "max_iterations": True}, "max_iterations", "valid integer"),
     ],
 )
 def test_bad_launches_are_422_naming_the_field(
@@ -111,6 +117,17 @@ def test_bad_launches_are_422_naming_the_field(
     detail = response.json()["detail"]
     assert any(field in d["loc"] and says in d["msg"] for d in detail), detail
     assert client.get("/api/runs").json()["total"] == 0  # nothing was launched
+
+
+def test_a_run_bounded_by_queries_stops_there_and_says_so(client: TestClient) -> None:
+    """The bounds go into the run's stored config; the run ends on the query bound whatever
+    its seconds (line-2 seed 3 needs 6 queries to solve)."""
+    body = {"scene": "line-2", "seed": 3, "budget_s": 3600, "max_queries": 3}
+    run = client.post("/api/runs", json=body).json()
+    assert run["config"]["max_queries"] == 3 and run["config"]["max_iterations"] is None
+    assert _wait_status(client, run["id"], {"solved", "timeout", "failed"}) == "timeout"
+    detail = client.get(f"/api/runs/{run['id']}").json()
+    assert detail["queries"] == 3 and detail["message"] == "no plan (query budget of 3 reached)"
 
 
 def test_unknown_run_is_404(client: TestClient) -> None:

@@ -184,6 +184,8 @@ def test_cancel_keeps_the_finished_trials_and_resume_runs_the_rest(
             "only used by the learned",
         ),
         ({"scene": "line-2", "workers": "2"}, ["body", "workers"], "valid integer"),
+        ({"scene": "line-2", "max_queries": 0}, ["body", "max_queries"], "greater than or"),
+        ({"scene": "line-2", "max_iterations": 1.5}, ["body", "max_iterations"], "valid integer"),
         ({"scene": "line-2", "colour": "red"}, ["body", "colour"], "Extra inputs"),
         (  # the shipped model saw kitchen-4 seeds 0-99: a benchmark must not test on them
             {"scene": "kitchen-4", "seed_start": 10, "trials": 2},

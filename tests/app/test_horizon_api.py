@@ -147,3 +147,19 @@ def test_a_bad_parameter_is_422_naming_it(
     assert response.status_code == 422, response.text
     detail = response.json()["detail"]
     assert any(d["loc"] == ["query", name] and says in d["msg"] for d in detail), detail
+
+
+def test_bounds_on_queries_keep_a_series_apart_and_leave_older_keys_alone() -> None:
+    """Benchmarks bounded by queries or iterations are another series; one without bounds keeps
+    the key it had before there were any (a page that picked it still finds it)."""
+    import hashlib
+    from dataclasses import astuple, replace
+
+    from app.horizon import _Settings
+
+    plain = _Settings("tabletop2d", ("baseline", "sequential"), 2, 100, 30.0, None, "auto")
+    before = hashlib.sha1(repr(astuple(plain)[:7]).encode()).hexdigest()[:12]
+    assert plain.key() == before
+    bounded = replace(plain, max_queries=500)
+    assert bounded.key() != plain.key() != replace(plain, max_iterations=500).key()
+    assert bounded.label() == "tabletop2d: baseline, sequential — 2 seeds, 30 s, 500 queries"
