@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import re
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -29,6 +30,10 @@ from planner.store import BenchTrialRecord, QueryOutcome, RunStore
 from tests.postgres import PostgresServer
 
 LINE = str(Path(__file__).parent / "search" / "line-reach.json")  # a fast pure-Python scene
+# Trials of LINE that solve (each seed in a few hundred queries, under a second) whatever the
+# machine's load: bounded by queries, with seconds to spare (a busy machine once timed out a
+# baseline trial of 60 s here).
+SOLVES: dict[str, Any] = {"budget_s": 3600.0, "max_queries": 5000}
 
 
 @pytest.mark.parametrize(
@@ -174,7 +179,7 @@ def _outcomes(db: Path, bench_id: str) -> dict[tuple[int, str], tuple[str, int]]
 def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    config = make_config(LINE, ["baseline", "sequential"], trials=2, seed_start=0, budget_s=60.0)
+    config = make_config(LINE, ["baseline", "sequential"], trials=2, seed_start=0, **SOLVES)
     local_db, ray_db = tmp_path / "local.db", tmp_path / "ray.db"
     local_id, local = run_bench(local_db, config, workers=2)
     assert len(local) == 4 and all(r.status == "solved" for r in local)
@@ -218,7 +223,7 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
 def test_an_interrupted_benchmark_resumes_where_it_stopped(store_url: str) -> None:
     """On SQLite and on PostgreSQL."""
     db = store_url
-    config = make_config(LINE, ["baseline"], trials=2, seed_start=3, budget_s=60.0)
+    config = make_config(LINE, ["baseline"], trials=2, seed_start=3, **SOLVES)
     bench_id, first = run_bench(db, config, workers=1)
     assert len(first) == 2
     # Forget one trial, as if the benchmark had been stopped before it finished.

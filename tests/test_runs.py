@@ -134,6 +134,7 @@ def test_budget_running_out_is_a_recorded_timeout(tmp_path: Path) -> None:
     assert proc.returncode == 1
     out = json.loads(proc.stdout)
     assert out["status"] == "timeout"
+    assert out["message"].startswith("no plan (time budget of 0.01 s reached")
     assert RunStore(db).get_run(out["run_id"]).status == "timeout"
 
 

@@ -127,7 +127,11 @@ def test_the_papers_planner_insists_on_a_failing_test_and_dead_ends_stop_it() ->
     """The paper's planner scores "query again" by the model's Eq. 1 however often the query
     failed: in ``rule`` its first plan's reach test fails for the only pose it sampled, and it
     asks that test again and again. With ``dead_ends`` the failures make that node a dead end,
-    blamed on the pose the test reads, and the search samples another pose and solves."""
+    blamed on the pose the test reads, and the search samples another pose and solves.
+
+    Stuck, it gets the test's first answer back each time (a test is asked once per input):
+    no new query, so it is bounded by iterations, not by queries or seconds (500 take about
+    0.5 s; a busy machine once made 5 s too few)."""
     from collections import Counter
 
     from planner.api import plan
@@ -136,9 +140,12 @@ def test_the_papers_planner_insists_on_a_failing_test_and_dead_ends_stop_it() ->
     case = load("rule")
     domain = _as_domain(case)
     sink = ListSink()
-    stuck = plan(case.problem, "paper", domain=domain, k=8, budget_s=5, sink=sink)
+    stuck = plan(
+        case.problem, "paper", domain=domain, k=8, budget_s=120, max_iterations=500, sink=sink
+    )
     failed = Counter((e.stream, str(e.inputs)) for e in sink.events if isinstance(e, StreamQueried))
     assert stuck.status == "timeout"
+    assert stuck.message == "no plan (iteration budget of 500 reached)"
     assert failed.most_common(1)[0][1] > 100  # the same query, over and over
     fixed = plan(case.problem, "paper:dead_ends=on", domain=domain, k=8, budget_s=30)
     assert fixed.status == "solved" and len(fixed.result.queries) < 20

@@ -15,6 +15,7 @@ from planner.abstract import AbstractConfig, plan_abstract, replay
 from planner.domains import problem_for_scene
 from planner.events import Emitter, ListSink, NodeAdded, SolutionFound, StreamQueried
 from planner.search.binding import stream_contexts
+from planner.search.bounds import SearchBounds
 from planner.search.mcts import BaselinePolicy, TreeSearch
 
 pytestmark = pytest.mark.slow
@@ -69,8 +70,11 @@ def test_a_search_run_again_goes_on_with_its_tree() -> None:
     """Run in slices (as a caller that reports between them does), a search keeps one node per
     stream plan under the root: the second slice goes on with the first one's tree."""
     ts = search(3)
-    for _ in range(3):
-        ts.run(deadline=time.perf_counter() + 0.01)
+    for iterations in (2, 4, 6):  # slices of 2 iterations each (a bound counts over the calls)
+        sliced = ts.run(
+            deadline=time.perf_counter() + 30, bounds=SearchBounds(max_iterations=iterations)
+        )
+        assert sliced.iterations == 2 and sliced.status == "timeout"
     plans = [ts.tree[c].plan_index for c in ts.tree[0].children]
     assert len(plans) == len(set(plans)) and set(plans) <= set(range(len(ts.skeletons)))
     result = ts.run(deadline=time.perf_counter() + 30)

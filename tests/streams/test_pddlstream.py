@@ -237,7 +237,8 @@ def test_a_search_whose_streams_are_all_exhausted_ends_instead_of_asking_again(
 ) -> None:
     """PDDLStream's lists, functions and tests say when they have nothing more: once every
     stream plan is exhausted the run ends as failed; with the rule off it asks them again and
-    again until the budget is spent."""
+    again until a budget is spent: a bound on its queries, so that a busy machine (which once
+    gave the run's 3 s to anything but its queries) cannot change the outcome."""
     loaded = load_domain_folder(TINY)
     base = loaded.spec.bindings
 
@@ -255,8 +256,16 @@ def test_a_search_whose_streams_are_all_exhausted_ends_instead_of_asking_again(
     queried = [q for q in result.result.queries if q.stream == "test-reachable"]
     assert queried and all(q.exhausted for q in queried)
     if planner == "learned":
-        again = plan("tiny-2", "learned:exhaustion=off", domain=exhaustible, seed=0, budget_s=3)
+        again = plan(
+            "tiny-2",
+            "learned:exhaustion=off",
+            domain=exhaustible,
+            seed=0,
+            budget_s=120,  # a net only: the query bound ends the run (in about 0.5 s)
+            max_queries=50,
+        )
         # Off, it never ends: the lists and functions that gave their last are asked again
         # (their failures come back as known failures, TreeSearch.memo_exhausted, unasked).
         assert again.status == "timeout"
+        assert again.message == "no plan (query budget of 50 reached)"
         assert any(q.exhausted and q.success for q in again.result.queries)
