@@ -2,8 +2,13 @@
 events. One registry (:data:`PLANNERS`, :func:`get_planner`), as the top-k backends have.
 
 - ``baseline``: eTAMP's progressive-widening tree search (Ren et al.);
-- ``paper``: exactly Bradley & Roy's planner: UCT on -Q (Eq. 4 from the per-stream models),
-  "query again" as one more action, the stream plans' own order, no other addition;
+- ``paper``: Bradley & Roy's policy: UCT on -Q (Eq. 4 from the per-stream models), "query
+  again" as one more action, the stream plans' own order, none of ``learned``'s parts. Not
+  exactly the paper's planner: it runs on the loop every tree search here shares
+  (:meth:`_TreeSearchPlanner.solve`), which reuses identical answers (``reuse=True``), asks no
+  test or known failure twice, leaves exhausted streams alone and takes skeletons on demand,
+  so that a paired benchmark compares the policies alone (docs/learning.md, *The learned
+  policy*, says why);
 - ``learned``: the paper's planner with the additions measured to pay
   (:class:`~planner.search.learned.LearnedConfig`), the best configuration;
 - ``sequential``: binds each skeleton's streams in order, with retries and restarts (the

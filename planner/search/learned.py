@@ -260,7 +260,12 @@ class LearnedConfig:
 
     @classmethod
     def paper(cls) -> LearnedConfig:
-        """The paper's planner: every addition off (exhaustion, the streams' contract, stays)."""
+        """The paper's policy: every addition off (exhaustion, the streams' contract, stays).
+
+        The planner ``paper`` runs it on the loop every tree search here shares, which is not
+        the paper's: identical answers reused (``TreeSearch(reuse=True)``), a test or a known
+        failure not asked twice, skeletons on demand. A paired benchmark then compares the
+        policies alone, not a motion cache (docs/learning.md, *The learned policy*)."""
         off = {f.name: False for f in fields(cls) if f.type in (bool, "bool")}
         return cls(**{**off, "exhaustion": True})
 
