@@ -8,7 +8,9 @@ a pipe once it is stored; one reader thread here receives them and hands them to
 its run finished here (:meth:`~planner.store.RunStore.settle_run`: a closing event it stored
 decides, else the run is failed, or cancelled when the user asked, with a closing event).
 Cancelling asks the worker to stop (the search checks between iterations) and kills it after
-``cancel_grace_s``. Every ``sweep_s`` the reader also finishes runs of other processes that
+``cancel_grace_s``. When the server shuts down (SIGTERM, Ctrl-C) its live runs are stopped the
+same way and recorded as stopped by the shutdown (:data:`app.worker.SERVER_SHUT_DOWN`), not
+as cancelled by a user. Every ``sweep_s`` the reader also finishes runs of other processes that
 died (an earlier server's workers, a killed ``tamp plan``).
 """
 
@@ -27,6 +29,8 @@ from typing import Any
 
 from app import worker as worker_module
 from app.hub import EventHub
+from app.worker import SERVER_SHUT_DOWN
+from planner.api import CANCELLED_BY_USER
 from planner.events import event_to_dict
 from planner.runs import RunConfig
 from planner.store import RunStore
@@ -49,7 +53,8 @@ class _Worker:
     conn: Connection
     stop: MpEvent
     started: float = field(default_factory=time.monotonic)
-    cancel_at: float | None = None  # monotonic time the user asked to cancel
+    cancel_at: float | None = None  # monotonic time the user (or the shutdown) asked to stop
+    shutdown: bool = False  # asked to stop because the server shuts down, not by a user
     done: bool = False  # the worker said it finished
     ending: bool = False  # its run is being finished here
 
@@ -75,6 +80,7 @@ class RunManager:
         self.sweep_s = sweep_s
         self._swept = time.monotonic()
         self._ctx = multiprocessing.get_context("spawn")
+        self._shutdown = self._ctx.Event()  # set when the server shuts down: every worker sees it
         self._lock = threading.RLock()
         self._pending: deque[tuple[str, RunConfig]] = deque()
         self._workers: dict[str, _Worker] = {}
@@ -133,6 +139,7 @@ class RunManager:
         """Stop everything: queued runs are cancelled, running ones asked to stop then killed."""
         with self._lock:
             self._closing = True
+            self._shutdown.set()  # before any stop: a worker that stops reads why
             while self._pending:
                 run_id, _ = self._pending.popleft()
                 self._settle(run_id, "cancelled", "the server shut down before it started")
@@ -140,6 +147,7 @@ class RunManager:
                 worker.stop.set()
                 if worker.cancel_at is None:
                     worker.cancel_at = time.monotonic()
+                    worker.shutdown = True
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             with self._lock:
@@ -148,7 +156,7 @@ class RunManager:
             time.sleep(0.05)
         with self._lock:
             for worker in list(self._workers.values()):
-                self._kill(worker, "the server shut down")
+                self._kill(worker, f"{SERVER_SHUT_DOWN} (stopped by force)")
         self._reader.join(timeout=2.0)
 
     # --- workers ------------------------------------------------------------------------------
@@ -162,7 +170,7 @@ class RunManager:
                 stop = self._ctx.Event()
                 process = self._ctx.Process(
                     target=worker_module.main,
-                    args=(run_id, asdict(config), self.database, send, stop),
+                    args=(run_id, asdict(config), self.database, send, stop, self._shutdown),
                     name=f"run-{run_id[:8]}",
                     daemon=True,
                 )
@@ -228,7 +236,8 @@ class RunManager:
             log.warning(
                 "run %s did not stop within %.0f s; killing it", worker.run_id, self.cancel_grace_s
             )
-            self._kill(worker, "cancelled by the user (stopped by force)")
+            reason = SERVER_SHUT_DOWN if worker.shutdown else CANCELLED_BY_USER
+            self._kill(worker, f"{reason} (stopped by force)")
 
     def _kill(self, worker: _Worker, reason: str) -> None:
         if worker.process.is_alive():
@@ -249,8 +258,10 @@ class RunManager:
         cancelled = worker.cancel_at is not None
         if reason is not None:
             message = reason
+        elif worker.shutdown:  # it ended (stopped, or killed by whoever stops the server)
+            message = SERVER_SHUT_DOWN
         elif cancelled:
-            message = "cancelled by the user"
+            message = CANCELLED_BY_USER
         elif worker.done:  # it said it was done, yet the run is not finished: see its log
             message = "the worker stopped without finishing the run (the server log says why)"
         else:

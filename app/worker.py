@@ -30,6 +30,10 @@ from planner.events import Event, event_to_dict
 log = logging.getLogger(__name__)
 
 ORPHAN_EXIT_CODE = 3  # the exit code of a worker whose server went away
+# Why a run was stopped when its server shut down (SIGTERM, Ctrl-C of tamp serve) while it ran:
+# the closing run_cancelled event's reason and the run's message. Not "by the user": nobody
+# cancelled this run.
+SERVER_SHUT_DOWN = "stopped: the server shut down while it ran"
 
 
 def exit_with_parent(what: str, *, grace_s: float | None = None) -> threading.Thread | None:
@@ -75,15 +79,26 @@ class _Pipe:
 
 
 def main(
-    run_id: str, config: dict[str, Any], database: str, conn: Connection, stop: MpEvent
+    run_id: str,
+    config: dict[str, Any],
+    database: str,
+    conn: Connection,
+    stop: MpEvent,
+    shutdown: MpEvent | None = None,
 ) -> None:
-    """Entry point of a worker process."""
+    """Entry point of a worker process. ``stop`` set: stop the run; ``shutdown`` set too: it
+    is stopped because the server shuts down (:data:`SERVER_SHUT_DOWN`), else the user
+    cancelled it."""
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s worker %(name)s: %(message)s"
     )
     exit_with_parent(f"run {run_id}")
+    from planner.api import CANCELLED_BY_USER
     from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore
+
+    def why_stopped() -> str:
+        return SERVER_SHUT_DOWN if shutdown is not None and shutdown.is_set() else CANCELLED_BY_USER
 
     pipe = _Pipe(conn)
     store = RunStore(database)
@@ -94,7 +109,7 @@ def main(
             return
         run_config = RunConfig(**config)
         preload_libraries(run_config)
-        record_run(run_config, store, run_id, should_stop=stop.is_set)
+        record_run(run_config, store, run_id, should_stop=stop.is_set, stop_reason=why_stopped)
     except KeyboardInterrupt:
         log.warning("run %s interrupted", run_id)
     except Exception:

@@ -64,7 +64,11 @@ from planner.streams.runtime import QueryResult, StreamRuntime
 
 log = logging.getLogger(__name__)
 
+# Why a run that its caller stopped (``should_stop``) ended, unless ``stop_reason`` says otherwise.
+CANCELLED_BY_USER = "cancelled by the user"
+
 __all__ = [
+    "CANCELLED_BY_USER",
     "DEFAULT_PLANNER",
     "PLANNERS",
     "PlanResult",
@@ -324,10 +328,15 @@ def solve(
     run_id: str | None = None,
     progress: Callable[[str], None] | None = None,
     should_stop: Callable[[], bool] | None = None,
+    stop_reason: Callable[[], str] | None = None,
 ) -> PlanResult:
     """Run ``config`` (on ``problem`` when given, else on its scene); every step is reported to
     ``sink``. A run ends with ``run_finished`` (its plan validated and its plan file in it),
-    ``run_cancelled`` or ``run_failed`` (then the exception propagates)."""
+    ``run_cancelled`` or ``run_failed`` (then the exception propagates).
+
+    ``should_stop`` is asked between search steps; a run it stopped is cancelled, for the
+    reason ``stop_reason`` gives when asked then (default :data:`CANCELLED_BY_USER`): the
+    ``run_cancelled`` event's and the result's ``message``."""
     run_id = run_id or uuid.uuid4().hex
     emitter = Emitter(run_id, sink if sink is not None else ListSink())
     start = time.perf_counter()
@@ -348,8 +357,9 @@ def solve(
         raise
     result = out.result
     if result.status == "cancelled":
-        emitter.emit(RunCancelled, reason="cancelled by the user")
-        return out
+        reason = stop_reason() if stop_reason is not None else CANCELLED_BY_USER
+        emitter.emit(RunCancelled, reason=reason)
+        return replace(out, message=reason)
     try:  # after the planning clock stopped: the plan is validated before the run ends
         valid, message = out.check()
         plan = out.plan_file()

@@ -38,7 +38,7 @@ STATUS_TEXT: dict[str, str] = {
     "solved": "found a plan within its budget",
     "failed": "stopped on an error, or its plan did not validate",
     "timeout": "no plan within its budget",
-    "cancelled": "cancelled by a user",
+    "cancelled": "cancelled by a user, or stopped by the server's shutdown",
     "interrupted": "its process stopped before it finished",
 }
 if tuple(STATUS_TEXT) != RUN_STATUSES:

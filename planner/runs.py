@@ -98,16 +98,25 @@ def record_run(
     sinks: tuple[EventSink, ...] = (),
     progress: Callable[[str], None] | None = None,
     should_stop: Callable[[], bool] | None = None,
+    stop_reason: Callable[[], str] | None = None,
 ) -> RecordedRun:
     """Run ``config`` as the stored run ``run_id``: every event goes to the store (and to
     ``sinks``), the plan is validated, and the run is finished in the store however it ends.
     An exception or Ctrl-C finishes the run as failed / cancelled, keeps its events, and
-    propagates."""
+    propagates. A run ``should_stop`` stopped is cancelled for the reason ``stop_reason``
+    gives (:func:`planner.api.solve`; default: by the user)."""
     from planner.store import StoreSink
 
     sink = _Tee(StoreSink(store, run_id), FanOutSink(*sinks))
     try:
-        out = solve(config, sink=sink, run_id=run_id, progress=progress, should_stop=should_stop)
+        out = solve(
+            config,
+            sink=sink,
+            run_id=run_id,
+            progress=progress,
+            should_stop=should_stop,
+            stop_reason=stop_reason,
+        )
     except KeyboardInterrupt:
         sink.close()
         store.finish_run(run_id, "cancelled", message="interrupted by the user")
@@ -121,7 +130,7 @@ def record_run(
     valid, message = out.check()  # validated by solve(), before its run_finished
     plan = out.plan_file()
     if result.status == "cancelled":
-        message = "cancelled by the user"
+        message = out.message  # why it was stopped: solve() said so in its run_cancelled
     status = out.status
     store.finish_run(
         run_id,

@@ -165,3 +165,28 @@ def test_a_plan_that_does_not_validate_ends_the_run_as_failed_in_its_events_too(
     (finished,) = [e for e in sink.events if isinstance(e, RunFinished)]
     assert (finished.status, finished.valid, finished.message) == ("failed", False, "no")
     assert finished.plan is not None and finished.plan["domain"] == "line"
+
+
+def test_a_stopped_run_says_who_stopped_it(tmp_path: Path) -> None:
+    """A run its caller stopped is cancelled for the reason the caller gives (a server that
+    shuts down is not a user), in the result, the closing event and the stored run."""
+    from collections.abc import Callable
+
+    from planner.events import RunCancelled
+    from planner.runs import record_run
+
+    config = RunConfig(scene=LINE, seed=3, k=4, budget_s=30)
+    given: tuple[tuple[Callable[[], str] | None, str], ...] = (
+        (None, "cancelled by the user"),
+        (lambda: "stopped: the server shut down while it ran", "stopped: the server shut down"),
+    )
+    with RunStore(tmp_path / "runs.db") as store:
+        for reason, says in given:
+            run_id = store.create_run(LINE, 3, "baseline", {})
+            recorded = record_run(
+                config, store, run_id, should_stop=lambda: True, stop_reason=reason
+            )
+            assert recorded.status == "cancelled" and recorded.message.startswith(says)
+            assert store.get_run(run_id).message == recorded.message
+            closing = store.events(run_id)[-1]
+            assert isinstance(closing, RunCancelled) and closing.reason == recorded.message

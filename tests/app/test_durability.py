@@ -361,3 +361,32 @@ def test_a_tamp_plan_on_the_same_database_is_left_alone(scenes: Path, tmp_path: 
         if plan.poll() is None:
             plan.kill()
             plan.wait()
+
+
+def test_a_sigterm_of_the_server_records_its_runs_as_stopped_by_the_shutdown(
+    scenes: Path, tmp_path: Path
+) -> None:
+    """SIGTERM (how a service manager stops `tamp serve`) stops the live run as a cancel
+    does, but nobody cancelled it: it is recorded as stopped by the shutdown, in its message
+    and its closing event, and the queued run as never started."""
+    from app.worker import SERVER_SHUT_DOWN
+
+    db, log = tmp_path / "runs.db", tmp_path / "serve.log"
+    server = Server(db, scenes, log, max_running=1)
+    live = server.api("/api/runs", {"scene": "line-far", "k": 2, "budget_s": 120})
+    queued = server.api("/api/runs", {"scene": "line-2", "k": 2})
+    deadline = time.monotonic() + 60
+    while server.api(f"/api/runs/{live['id']}")["last_seq"] < 50:  # it is searching
+        assert time.monotonic() < deadline, log.read_text()
+        time.sleep(0.1)
+    server.stop()  # SIGTERM, and its exit awaited
+    # uvicorn shuts down, then raises the signal again: the exit says SIGTERM, not a crash
+    assert server.process.returncode == -signal.SIGTERM, log.read_text()
+    with RunStore(db) as store:
+        stopped = store.get_run(live["id"])
+        assert stopped.status == "cancelled", stopped
+        assert stopped.message.startswith(SERVER_SHUT_DOWN) and "user" not in stopped.message
+        closing = event_to_dict(store.events(live["id"])[-1])
+        assert closing["type"] == "run_cancelled" and closing["reason"] == stopped.message
+        never = store.get_run(queued["id"])
+        assert never.status == "cancelled" and "before it started" in never.message
