@@ -11,7 +11,8 @@ A web page on any site can make the browser reach a server on localhost. So ever
   ``tamp_token`` cookie, which the page sets when it is opened as ``/?token=TOKEN``: 401
   otherwise.
 
-:class:`Guard` applies it to the FastAPI app, with a request body limit (413) and headers
+:class:`Guard` applies it to the FastAPI app, with a request body limit (413), a JSON body that
+is not UTF-8 refused as a 422 naming the body (as any body that is not JSON), and headers
 that keep other sites from framing the dashboard; :mod:`app.viewgate` applies it to the 3D
 view. Websocket refusals are HTTP responses to the handshake, with the same JSON ``detail``.
 """
@@ -207,7 +208,8 @@ class Guard:
             await _refuse(scope, receive, send, too_large)
             return
         chunked = "chunked" in headers.get("transfer-encoding", "")
-        json_body = "json" in headers.get("content-type", "") and scope["method"] != "GET"
+        # FastAPI parses a body as JSON when its type says so, or says nothing
+        json_body = "json" in headers.get("content-type", "json") and scope["method"] != "GET"
         if ("content-length" not in headers and chunked) or json_body:
             body = await self._read_limited(receive)
             if body is None:
@@ -221,6 +223,10 @@ class Guard:
                     f"{self.max_json_items})",
                 )
                 await _refuse(scope, receive, send, refusal)
+                return
+            not_text = _not_utf8(body) if json_body else None
+            if not_text is not None:
+                await not_text(scope, receive, send)
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, _with_headers(send))
@@ -274,6 +280,23 @@ def _json_items(body: bytes) -> int:
     strings count too, so never fewer): counted at C speed before it is parsed, since parsing
     and validating 60,000 keys held the event loop for seconds."""
     return body.count(b",") + body.count(b"[") + body.count(b"{")
+
+
+def _not_utf8(body: bytes) -> Response | None:
+    """A JSON body must be UTF-8 text (RFC 8259, 8.1): another is a 422 naming the body and
+    the first byte that is not, as a body that is not JSON is (FastAPI answered 400 "There
+    was an error parsing the body", where the API promises a 422); None for UTF-8 text."""
+    try:
+        body.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        error = {
+            "loc": ["body", exc.start],
+            "msg": f"the body is not UTF-8 text: byte 0x{body[exc.start]:02x} at {exc.start} "
+            "(a JSON body must be UTF-8)",
+            "type": "json_invalid",
+        }
+        return JSONResponse({"detail": [error]}, status_code=422, headers=SECURITY_HEADERS)
+    return None
 
 
 def _replay(body: bytes, receive: Receive) -> Receive:

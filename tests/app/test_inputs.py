@@ -146,3 +146,21 @@ def test_a_body_that_is_not_json_is_422(client: TestClient) -> None:
         assert response.status_code == 422, (content, response.text)
         assert response.json()["detail"][0]["loc"][0] == "body"
     _nothing_launched(client)
+
+
+def test_a_body_that_is_not_utf8_is_422_naming_the_body(client: TestClient) -> None:
+    """A JSON body must be UTF-8 text; another was a 400 "There was an error parsing the
+    body" (FastAPI's), where the API promises a 422 for a bad body. With or without a
+    content type (FastAPI reads a body that says none as JSON)."""
+    body = b'{"scene": "line-2\xe9"}'
+    for headers in (JSON, {}):
+        response = client.post("/api/runs", content=body, headers=headers)
+        assert response.status_code == 422, response.text
+        (error,) = response.json()["detail"]
+        assert error["loc"] == ["body", 17] and "not UTF-8" in error["msg"], error
+        assert "0xe9" in error["msg"]
+    response = client.put("/api/viewer", content=b'{"run_id": "\xff"}', headers=JSON)
+    assert response.status_code == 422 and response.json()["detail"][0]["loc"][0] == "body"
+    bom = b'\xef\xbb\xbf{"scene": "line-2", "seed": -1}'  # UTF-8 with its byte-order mark
+    _field_error(client.post("/api/runs", content=bom, headers=JSON), "seed")
+    _nothing_launched(client)
