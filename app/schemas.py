@@ -29,6 +29,9 @@ def _integral(value: Any) -> Any:
 
 
 Integer = Annotated[int, BeforeValidator(_integral)]  # "integer" exactly as JSON Schema means it
+# A run's bound on queries or iterations (RunConfig.max_queries, max_iterations); with the
+# limits on the integer itself, so that the schema of an optional one says them.
+Bound = Annotated[int, Field(ge=1, le=MAX_BOUND), BeforeValidator(_integral)]
 
 SceneName = Annotated[
     str,
@@ -61,17 +64,13 @@ class RunRequest(BaseModel):
     budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
     model: ModelName | None = None
     k: Integer = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
-    max_queries: Integer | None = Field(
+    max_queries: Bound | None = Field(
         None,
-        ge=1,
-        le=MAX_BOUND,
         description="stop after this many stream queries a sampler answered, whatever the "
         "seconds (the same point on any machine); none: budget_s alone",
     )
-    max_iterations: Integer | None = Field(
+    max_iterations: Bound | None = Field(
         None,
-        ge=1,
-        le=MAX_BOUND,
         description="stop after this many search iterations (sequential: skeletons tried), "
         "whatever the seconds; none: budget_s alone",
     )
@@ -376,11 +375,11 @@ class BenchRequest(BaseModel):
     model: ModelName | None = Field(None, description="the learned planners' model by name")
     workers: Integer = Field(2, ge=1, le=16, description="trials at once")
     order: Literal["auto", "plan", "model"] = "auto"
-    max_queries: Integer | None = Field(
-        None, ge=1, le=MAX_BOUND, description="each trial's bound on stream queries (RunRequest)"
+    max_queries: Bound | None = Field(
+        None, description="each trial's bound on stream queries (as RunRequest's)"
     )
-    max_iterations: Integer | None = Field(
-        None, ge=1, le=MAX_BOUND, description="each trial's bound on search iterations"
+    max_iterations: Bound | None = Field(
+        None, description="each trial's bound on search iterations"
     )
 
 
