@@ -1348,3 +1348,20 @@ def _run_with_a_tree(server: Server) -> str:
     result = run_trial(Trial("kitchen-2", 0, "learned", 120.0), str(server.db))
     assert result.status == "solved" and result.run_id is not None, result
     return result.run_id
+
+
+def test_a_run_bounded_from_the_form_stops_at_its_queries(page: Any, server: Server) -> None:
+    """The form's Max queries goes with the launch: the run stops there whatever its seconds
+    (a line-2 plan needs at least four queries), and its row and header say timeout."""
+    page.fill("#launch-max-queries", "3")
+    run_id = _launch(page, "line-2", "baseline", budget="600")
+    _wait_finished(page, run_id)
+    run = server.api(f"/api/runs/{run_id}")
+    assert run["config"]["max_queries"] == 3 and run["config"]["budget_s"] == 600
+    assert (run["status"], run["queries"]) == ("timeout", 3)
+    assert run["message"] == "no plan (query budget of 3 reached)"
+    expect(page.locator("#run-header [data-testid=run-status]")).to_have_text("timeout")
+    # Emptied, the field asks for no bound.
+    page.fill("#launch-max-queries", "")
+    again = _launch(page, "line-2", "baseline", budget="60")
+    assert server.api(f"/api/runs/{again}")["config"]["max_queries"] is None
