@@ -122,6 +122,10 @@ def make_config(
             f"unknown planner(s) {', '.join(unknown) or '(none given)'} "
             f"(known: {', '.join(PLANNERS)}, or variants such as learned:dead_ends=off)"
         )
+    for p in names:
+        own_model = get_planner(p).model
+        if own_model not in (None, PRIORS) and not Path(str(own_model)).is_file():
+            raise BenchError(f"planner {p!r}: no model file {own_model}")
     if len(set(names)) != len(names):
         raise BenchError(f"a planner is listed twice: {', '.join(names)}")
     if not 1 <= trials <= MAX_TRIALS:

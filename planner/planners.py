@@ -207,7 +207,7 @@ class Planner(ABC):
 def load_predictor(config: PlannerConfig, loaded: LoadedDomain) -> Predictor:
     """The cost model of a run: ``config.model``, else the domain's shipped model, else per-stream
     priors (from the queries recorded in ``config.priors_db``, uniform without), with a warning.
-    A planner spec's ``model=priors`` (``config.planner``) takes priors whatever the run names."""
+    A planner spec's ``model=priors`` or ``model=FILE`` (``config.planner``) takes precedence."""
     chosen = get_planner(config.planner).model or config.model
     path = loaded.spec.model if chosen is None else chosen
     if path is not None and path != PRIORS:
@@ -734,8 +734,9 @@ class PlannerSpec:
     kind: type[Planner]
     parts: LearnedConfig | None = None  # the learned planners' configuration
     skeletons: str | None = None  # "skeletons=kstar": the run's skeleton source, any planner
-    # "model=priors": a learned planner on per-stream priors whatever model the run names, so
-    # one paired benchmark can hold the learned search with its model and without
+    # "model=priors" or "model=FILE": a learned planner on per-stream priors or on that model
+    # file whatever model the run names, so one paired benchmark can hold the learned search
+    # with two models, or with its model and without
     model: str | None = None
 
     @property
@@ -779,10 +780,10 @@ def get_planner(spec: str) -> PlannerSpec:
     for item in (t for t in settings.split(":") if t):
         key, _, value = item.partition("=")
         if key == "model":
-            if value != PRIORS or make is None:
+            if not value or make is None:
                 raise ValueError(
-                    f"planner setting {item!r}: only paper and learned take model={PRIORS} "
-                    "(a model file is given with --model)"
+                    f"planner setting {item!r}: only paper and learned take "
+                    f"model={PRIORS} or model=FILE"
                 )
             model = value
         elif key != "skeletons":

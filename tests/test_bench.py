@@ -114,7 +114,8 @@ def test_model_priors_runs_learned_on_the_stores_priors_though_the_domain_ships_
 
 def test_one_benchmark_holds_learned_with_its_model_and_on_priors() -> None:
     """``learned:model=priors`` runs on the store's priors beside ``learned`` with the model, in
-    one paired benchmark; only the learned planners take the setting."""
+    one paired benchmark (``model=FILE`` on another model file); only the learned planners take
+    the setting, and a file that is not there is refused before any trial."""
     config = make_config(
         "kitchen-4",
         ["baseline", "learned", "learned:model=priors"],
@@ -130,8 +131,22 @@ def test_one_benchmark_holds_learned_with_its_model_and_on_priors() -> None:
     }
     with pytest.raises(ValueError, match="only paper and learned take model=priors"):
         get_planner("baseline:model=priors")
-    with pytest.raises(ValueError, match="only paper and learned take model=priors"):
-        get_planner("learned:model=other.pt")
+    with pytest.raises(BenchError, match=r"planner 'learned:model=other\.pt': no model file"):
+        make_config(
+            "kitchen-4",
+            ["learned", "learned:model=other.pt"],
+            trials=1,
+            seed_start=1000,
+            budget_s=10,
+        )
+    two = make_config(
+        "kitchen-4",
+        ["learned", f"learned:model={DEFAULT_MODEL}"],
+        trials=1,
+        seed_start=1000,
+        budget_s=10,
+    )
+    assert {t.model for t in trial_order(two)} == {str(DEFAULT_MODEL)}
 
 
 def test_a_model_order_gives_every_tree_search_the_model_and_is_kept_for_resume() -> None:
