@@ -182,9 +182,9 @@ class LearnedConfig:
     part of the policy but the stream's own word: on for every tree search, the baseline's and
     the paper's too; off queries such a node again and again (each query a failure).
 
-    Measured (off against on, paired, docs/BENCHMARKS.md, *Published PDDLStream examples*): on
-    pickplace-4 (e6d5278, 8 seeds) off asked 982 IK queries to on's 281, 821 of them failures,
-    at no measurable cost in time."""
+    Measured (off against on, paired): on pickplace-4 (e6d5278, 8 seeds, a table since
+    superseded) off asked 982 IK queries to on's 281, 821 of them failures, at no measurable
+    cost in time."""
 
     plans_by_estimate: bool = True
     """The stream plan to go down is the one with the best estimate, without UCT's exploration
@@ -219,7 +219,9 @@ class LearnedConfig:
     turned the search depth-first (it went where it had got furthest, with little exploration)
     and ranked stream plans by their length instead of the top-k planner's cost.
 
-    Measured: see docs/BENCHMARKS.md, *Trusting estimates*."""
+    Measured: docs/BENCHMARKS.md, *Published PDDLStream examples*: on priors (nothing
+    trusted) ``learned`` solved what the baseline solved on all seven pick_place_2d scenes;
+    off against on was measured at 951652e (the grid example's test), not on the benchmarks."""
 
     exhausted_dead: bool = True
     """With ``dead_ends``: a node whose stream said it has nothing more for its inputs (an
@@ -234,7 +236,9 @@ class LearnedConfig:
     is left alone (never queried again) but counts as a live success for the node above,
     which keeps re-sampling below a choice that left no room (the issue's 4,429 placements).
 
-    Measured: see docs/BENCHMARKS.md, *Trusting estimates*."""
+    Measured on pickplace-4 at c7acaa6 (158 and 262 queries with it, as with the part off,
+    where counting each death as a failure of the sure placement made 1,682 and 699); not
+    measured on the current benchmarks."""
 
     doubt_plans: bool = True
     """A stream plan that relies on a stream instance the search doubts (the same instance of
@@ -245,7 +249,10 @@ class LearnedConfig:
     failing instance fed fresh samples leaves low (the search resamples a pose that leaves no
     room, again and again).
 
-    Measured (off against on, paired, docs/BENCHMARKS.md): not measured yet."""
+    Measured (off against on, paired, docs/BENCHMARKS.md, *Published PDDLStream examples*):
+    off, pickplace-blocked-3 is solved in none of 20 seeds (20 of 20 on); on the tight regions
+    it costs (off takes 10% less total time at 4 and 6 blocks, 37% less at 8, where a clearance
+    test that fails often but not always is doubted)."""
 
     known_failures: bool = True
     """A node whose next query the search answered as a known failure (the same stream and
