@@ -449,6 +449,7 @@ async function selectRun(id, run = null) {
   }
   if (!current()) return;
   state.opening = false;
+  pollPicked(); // at once: the clicks made before this run was shown are told from later ones
   if (done) {
     state.done = true; // a finished run: everything is here, nothing is live
     updateStep();
@@ -1433,6 +1434,8 @@ window.dashboard = {
       progress: tree.progress?.message ?? null,
       fans: tree.fans.length,
       matches: app.search.matches.length,
+      // the page has asked the 3D view once for this run: a ghost clicked from now on is shown
+      pickedReady: app.run?.pickedSeen !== undefined,
     };
   },
   /** Where node ``id`` is drawn, in page (client) pixels, or null. */

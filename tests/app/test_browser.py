@@ -800,6 +800,7 @@ def test_benchmark_compare_train_and_run_from_the_page(page: Any, server: Server
         )
         assert conf["node_id"] != leaf
         picked = page.locator("[data-testid=viewer-picked]")
+        page.wait_for_function("window.dashboard.state().pickedReady")  # clicks from now on
         with viser_client(server.api("/api/health")["viewer_url"]) as viser:
             viser.click("/search/confs", instance_index=0)  # the first configuration sampled
             expect(picked).to_contain_text(f"ghost of node #{conf['node_id']}")  # asked every 1.5 s
@@ -1248,6 +1249,7 @@ def test_switching_runs_of_three_domains_leaves_nothing_stale(page: Any, server:
     viewer_url = server.api("/api/health")["viewer_url"]
     if viewer_url is not None:
         _wait_viewer_node(server, conf["node_id"])  # the view shows the kitchen run, selected
+        page.wait_for_function("window.dashboard.state().pickedReady")  # clicks from now on
         with viser_client(viewer_url) as viser:
             viser.click("/search/confs", instance_index=0)
             expect(page.locator("[data-testid=viewer-picked]")).to_contain_text("ghost of node")
