@@ -646,8 +646,9 @@ class RunStore:
 
     # events and queries
 
-    def events(self, run_id: str, *, after: int = -1, limit: int | None = None) -> list[Event]:
-        """The run's events with ``seq > after`` in order, at most ``limit`` of them."""
+    def _event_rows(self, run_id: str, after: int, limit: int | None) -> list[Any]:
+        """The stored rows ``(seq, t, type, payload)`` of the run's events with ``seq > after``,
+        in order, at most ``limit``; an unknown run raises as :meth:`_require` does."""
         _bounded("after", after, low=-1)
         query = (
             select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
@@ -658,7 +659,11 @@ class RunStore:
             query = query.limit(_bounded("limit", limit))
         with self.engine.connect() as conn:
             self._require(conn, run_id)
-            rows = conn.execute(query).all()
+            return list(conn.execute(query).all())
+
+    def events(self, run_id: str, *, after: int = -1, limit: int | None = None) -> list[Event]:
+        """The run's events with ``seq > after`` in order, at most ``limit`` of them."""
+        rows = self._event_rows(run_id, after, limit)
         out: list[Event] = []
         for seq, t, type_, payload in rows:
             data = json.loads(payload)
@@ -673,17 +678,7 @@ class RunStore:
         its JSON)``: the text :func:`~planner.events.event_to_json` makes of it, put together
         from the stored payload without parsing it (every stored event was checked when it was
         written). What the dashboard serves: tens of times cheaper than :meth:`events`."""
-        _bounded("after", after, low=-1)
-        query = (
-            select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
-            .where(EventRow.run_id == run_id, EventRow.seq > after)
-            .order_by(EventRow.seq)
-        )
-        if limit is not None:
-            query = query.limit(_bounded("limit", limit))
-        with self.engine.connect() as conn:
-            self._require(conn, run_id)
-            rows = conn.execute(query).all()
+        rows = self._event_rows(run_id, after, limit)
         head = f',"run_id":{_dumps(run_id)},"seq":'
         out: list[tuple[int, str]] = []
         for seq, t, type_, payload in rows:
