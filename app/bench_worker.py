@@ -15,8 +15,6 @@ import logging
 import signal
 from multiprocessing.connection import Connection
 
-from app.worker import exit_with_parent
-
 log = logging.getLogger(__name__)
 
 STOP_GRACE_S = 30.0  # a worker whose server is gone is ended this long after SIGTERM
@@ -32,7 +30,6 @@ def main(database: str, bench_id: str, workers: int, conn: Connection) -> None:
         level=logging.WARNING, format="%(asctime)s %(levelname)s bench %(name)s: %(message)s"
     )
     signal.signal(signal.SIGTERM, _interrupt)
-    exit_with_parent(f"benchmark {bench_id}", grace_s=STOP_GRACE_S)
     from planner.bench import BenchError, run_bench
 
     outcome: tuple[str, str | None] = ("done", None)

@@ -15,7 +15,6 @@ A benchmark whose process died (a killed ``tamp bench``, a crashed server) is ma
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import threading
 import time
 from collections import OrderedDict
@@ -29,6 +28,7 @@ from typing import Any
 
 from app import bench_worker, catalog
 from app.errors import BusyError, NotLiveError, RequestError
+from planner import supervise
 from planner.bench import BenchConfig, BenchError, create_bench, make_config
 from planner.planners import get_planner
 from planner.report import summarize
@@ -164,7 +164,7 @@ class BenchService:
         self.max_running = max_running
         self.cancel_grace_s = cancel_grace_s
         self.sweep_s = sweep_s
-        self._ctx = multiprocessing.get_context("spawn")
+        self._ctx = supervise.context()
         self._lock = threading.RLock()
         self._workers: dict[str, _Worker] = {}
         self._messages: dict[str, str] = {}  # why a benchmark of this server stopped
@@ -424,13 +424,17 @@ class BenchService:
 
     def _start(self, bench_id: str, workers: int) -> None:
         receive, send = self._ctx.Pipe(duplex=False)
-        process = self._ctx.Process(
-            target=bench_worker.main,
-            args=(self.database, bench_id, workers, send),
+        process = supervise.spawn(
+            bench_worker.main,
+            self.database,
+            bench_id,
+            workers,
+            send,
             name=f"bench-{bench_id}",
             daemon=False,  # it starts processes of its own (the trials)
+            what=f"benchmark {bench_id}",
+            grace_s=bench_worker.STOP_GRACE_S,
         )
-        process.start()
         send.close()
         self._workers[bench_id] = _Worker(bench_id, process, receive)
 

@@ -17,7 +17,6 @@ died (an earlier server's workers, a killed ``tamp plan``).
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import threading
 import time
 from collections import deque
@@ -30,6 +29,7 @@ from typing import Any
 from app import worker as worker_module
 from app.hub import EventHub
 from app.worker import SERVER_SHUT_DOWN
+from planner import supervise
 from planner.api import CANCELLED_BY_USER
 from planner.events import event_to_dict
 from planner.runs import RunConfig
@@ -79,7 +79,7 @@ class RunManager:
         self.cancel_grace_s = cancel_grace_s
         self.sweep_s = sweep_s
         self._swept = time.monotonic()
-        self._ctx = multiprocessing.get_context("spawn")
+        self._ctx = supervise.context()
         self._shutdown = self._ctx.Event()  # set when the server shuts down: every worker sees it
         self._lock = threading.RLock()
         self._pending: deque[tuple[str, RunConfig]] = deque()
@@ -168,13 +168,17 @@ class RunManager:
                 self.store.start_run(run_id)
                 receive, send = self._ctx.Pipe(duplex=False)
                 stop = self._ctx.Event()
-                process = self._ctx.Process(
-                    target=worker_module.main,
-                    args=(run_id, asdict(config), self.database, send, stop, self._shutdown),
+                process = supervise.spawn(
+                    worker_module.main,
+                    run_id,
+                    asdict(config),
+                    self.database,
+                    send,
+                    stop,
+                    self._shutdown,
                     name=f"run-{run_id[:8]}",
-                    daemon=True,
+                    what=f"run {run_id}",
                 )
-                process.start()
                 send.close()  # the worker holds the other end; EOF here means it is gone
                 self._workers[run_id] = _Worker(run_id, process, receive, stop)
                 log.info("run %s started in process %s", run_id, process.pid)

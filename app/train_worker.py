@@ -11,8 +11,6 @@ import time
 from multiprocessing.connection import Connection
 from typing import Any
 
-from app.worker import exit_with_parent
-
 log = logging.getLogger(__name__)
 
 PROGRESS_S = 0.25  # at most this often a progress message
@@ -23,7 +21,6 @@ def main(spec: dict[str, Any], database: str, out: str, conn: Connection) -> Non
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s train %(name)s: %(message)s"
     )
-    exit_with_parent(f"training {spec['name']}")
     lock = threading.Lock()
 
     def send(message: tuple[str, Any]) -> None:

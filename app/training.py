@@ -15,7 +15,6 @@ offered by name at once (``GET /api/models``).
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import threading
 import time
 import uuid
@@ -28,6 +27,7 @@ from typing import Any
 
 from app import catalog, train_worker
 from app.errors import BusyError, RequestError
+from planner import supervise
 from planner.domains import domain_of_scene, find_scene, load_domain
 from planner.scene import SceneError
 from planner.store import LIVE_STATUSES, RunStore
@@ -78,7 +78,7 @@ class TrainingService:
         self.database = database
         self.domains = domains
         self.models = models
-        self._ctx = multiprocessing.get_context("spawn")
+        self._ctx = supervise.context()
         self._lock = threading.RLock()
         self._jobs: dict[str, TrainJob] = {}
         self._running: _Running | None = None
@@ -166,13 +166,15 @@ class TrainingService:
                 raise BusyError("a training job is running; the dashboard trains one at a time")
             receive, send = self._ctx.Pipe(duplex=False)
             out = self.models.directory / f"{name}.pt"
-            process = self._ctx.Process(
-                target=train_worker.main,
-                args=(spec, self.database, str(out), send),
+            process = supervise.spawn(
+                train_worker.main,
+                spec,
+                self.database,
+                str(out),
+                send,
                 name=f"train-{job.id}",
-                daemon=True,
+                what=f"training {name}",
             )
-            process.start()
             send.close()
             self._running = _Running(job.id, process, receive)
             self._jobs[job.id] = job

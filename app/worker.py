@@ -7,21 +7,17 @@ sends that batch through a pipe to the server, which fans it out to websocket cl
 no client has seen. Its last message is ``("done", run_id, None)``, sent after the run is
 finished in the store; a worker that dies without it is handled by the run manager.
 
-A worker never outlives its server: a thread waits on the parent process's sentinel and ends
-the process at once when the server goes away (killed, crashed). The run is then finished by
-the next server that opens the store (:meth:`~planner.store.RunStore.mark_interrupted`).
+A worker never outlives its server: it is started by :func:`planner.supervise.spawn`, which
+ends it at once when the server goes away (killed, crashed). The run is then finished by the
+next server that opens the store (:meth:`~planner.store.RunStore.mark_interrupted`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
-import multiprocessing
-import os
-import signal
 import threading
-import time
-from multiprocessing.connection import Connection, wait
+from multiprocessing.connection import Connection
 from multiprocessing.synchronize import Event as MpEvent
 from typing import Any
 
@@ -29,33 +25,10 @@ from planner.events import Event, event_to_dict
 
 log = logging.getLogger(__name__)
 
-ORPHAN_EXIT_CODE = 3  # the exit code of a worker whose server went away
 # Why a run was stopped when its server shut down (SIGTERM, Ctrl-C of tamp serve) while it ran:
 # the closing run_cancelled event's reason and the run's message. Not "by the user": nobody
 # cancelled this run.
 SERVER_SHUT_DOWN = "stopped: the server shut down while it ran"
-
-
-def exit_with_parent(what: str, *, grace_s: float | None = None) -> threading.Thread | None:
-    """End this process as soon as its parent (the server) is gone; None without a parent.
-    With ``grace_s``, it is first sent SIGTERM, so that it can stop what it started (a
-    benchmark's trial processes), and ended only if it is still there ``grace_s`` later."""
-    parent = multiprocessing.parent_process()
-    if parent is None:
-        return None
-    sentinel = parent.sentinel
-
-    def watch() -> None:
-        wait([sentinel])
-        log.warning("%s: the server is gone; the worker stops", what)
-        if grace_s is not None:
-            os.kill(os.getpid(), signal.SIGTERM)
-            time.sleep(grace_s)
-        os._exit(ORPHAN_EXIT_CODE)
-
-    thread = threading.Thread(target=watch, name="watch-server", daemon=True)
-    thread.start()
-    return thread
 
 
 class _Pipe:
@@ -92,7 +65,6 @@ def main(
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s worker %(name)s: %(message)s"
     )
-    exit_with_parent(f"run {run_id}")
     from planner.api import CANCELLED_BY_USER
     from planner.runs import RunConfig, preload_libraries, record_run
     from planner.store import RunStore

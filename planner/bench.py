@@ -20,6 +20,7 @@ from typing import Any
 from planner import __version__
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.experiment import (
+    BENCH_KEY,
     CRASHED,
     StoreUnreachableError,
     Trial,
@@ -287,6 +288,47 @@ def trial_order(config: BenchConfig) -> list[Trial]:
     return out
 
 
+def _link_finished(
+    store: RunStore, bench_id: str, scene: str, done: set[tuple[int, str]]
+) -> set[tuple[int, str]]:
+    """Trials of a resumed benchmark whose run finished but whose result was never saved (the
+    benchmark was killed between the two): recorded now from their runs, so that they are not
+    run again; returns their (seed, planner). Runs whose process died unfinished are settled
+    first (they are run again)."""
+    store.mark_interrupted()
+    linked: dict[tuple[int, str], BenchTrialRecord] = {}
+    for run in store.runs_tagged(scene, BENCH_KEY, bench_id):
+        key = (run.seed, run.planner)
+        finished = run.status in ("solved", "timeout") or (
+            run.status == "failed" and not run.message.startswith("crashed")
+        )
+        if key in done or not finished:
+            continue
+        linked[key] = BenchTrialRecord(
+            bench_id=bench_id,
+            seed=run.seed,
+            planner=run.planner,
+            run_id=run.id,
+            status=run.status,
+            valid=True if run.status == "solved" else None,
+            planning_s=run.planning_s,
+            execution_s=run.execution_s,
+            oracle_s=run.oracle_s,
+            queries=run.queries,
+            error=run.message if run.status == "failed" else None,
+        )
+    for trial in linked.values():
+        store.record_trial(trial)
+        log.info(
+            "benchmark %s: seed %d (%s) finished in run %s before the benchmark stopped: kept",
+            bench_id,
+            trial.seed,
+            trial.planner,
+            trial.run_id,
+        )
+    return set(linked)
+
+
 def create_bench(
     store: RunStore, config: BenchConfig, *, workers: int = 2, ray_address: str | None = None
 ) -> str:
@@ -336,6 +378,7 @@ def run_bench(
             done = {
                 (t.seed, t.planner) for t in store.bench_trials(bench_id) if t.status != CRASHED
             }
+            done |= _link_finished(store, bench_id, config.scene, done)
             check(config)  # the scene or the model file may have changed since
             code, started = code_revision(), previous.config.get("code")
             if started is not None and code != started:
@@ -351,7 +394,11 @@ def run_bench(
             bench_id = create_bench(store, config, workers=workers, ray_address=ray_address)
             done = set()
         store.set_bench_status(bench_id, "running")
-    todo = [t for t in trial_order(config) if (t.seed, t.planner) not in done]
+    todo = [
+        replace(t, bench_id=bench_id)
+        for t in trial_order(config)
+        if (t.seed, t.planner) not in done
+    ]
     log.info("benchmark %s: %d trials to run (%d done before)", bench_id, len(todo), len(done))
 
     def save(result: TrialResult) -> None:

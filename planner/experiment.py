@@ -10,7 +10,6 @@ batch goes on: ``tamp bench --resume`` runs crashed trials again.
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 import statistics
 import sys
@@ -39,6 +38,9 @@ class Trial:
     domain: str | None = None  # the domain's name or folder (RunConfig.domain)
     max_queries: int | None = None  # RunConfig.max_queries
     max_iterations: int | None = None  # RunConfig.max_iterations
+    # The benchmark the trial belongs to, recorded with its run: a resumed benchmark finds a
+    # run that finished when its result could not be saved (its benchmark killed in between).
+    bench_id: str | None = None
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,7 @@ class TrialResult:
         return out
 
 
+BENCH_KEY = "bench_id"  # the key of a trial's benchmark in its run's stored configuration
 CRASHED = "crashed"  # a trial whose process or Ray node died: not an outcome, run it again
 LOCAL_RAY = "local"  # --ray-address for a Ray started in this process, on this machine
 
@@ -110,7 +113,10 @@ def run_trial(trial: Trial, db: str, run_id: str | None = None) -> TrialResult:
         max_iterations=trial.max_iterations,
     )
     preload_libraries(config)
-    run_id = store.create_run(trial.scene, trial.seed, trial.planner, asdict(config), run_id=run_id)
+    stored = asdict(config)
+    if trial.bench_id is not None:
+        stored[BENCH_KEY] = trial.bench_id
+    run_id = store.create_run(trial.scene, trial.seed, trial.planner, stored, run_id=run_id)
     try:
         recorded = record_run(config, store, run_id)
     except Exception as exc:  # a crashed trial is data, not the end of the batch
@@ -220,7 +226,9 @@ def _trial_process(trial: Trial, db: str, run_id: str, conn: Connection) -> None
 def _run_local(
     trials: Sequence[Trial], db: str, workers: int, done: Callable[[TrialResult], None]
 ) -> None:
-    ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: OMPL seeds per process
+    from planner import supervise
+
+    ctx = supervise.context()
     pending = deque(trials)
     running: dict[Connection, tuple[BaseProcess, Trial, str]] = {}
     try:
@@ -229,10 +237,15 @@ def _run_local(
                 trial = pending.popleft()
                 run_id = uuid.uuid4().hex
                 receive, send = ctx.Pipe(duplex=False)
-                proc: BaseProcess = ctx.Process(
-                    target=_trial_process, args=(trial, db, run_id, send), daemon=True
+                # A fresh interpreter (OMPL seeds per process) that ends with this one.
+                proc = supervise.spawn(
+                    _trial_process,
+                    trial,
+                    db,
+                    run_id,
+                    send,
+                    what=f"trial {trial.scene} seed {trial.seed} ({trial.planner})",
                 )
-                proc.start()
                 send.close()
                 running[receive] = (proc, trial, run_id)
             for conn in wait(list(running), timeout=1.0):

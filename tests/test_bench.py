@@ -236,22 +236,37 @@ def test_process_pool_and_ray_give_the_same_outcomes_and_a_report(
 
 @pytest.mark.slow
 def test_an_interrupted_benchmark_resumes_where_it_stopped(store_url: str) -> None:
-    """On SQLite and on PostgreSQL."""
+    """On SQLite and on PostgreSQL: a trial whose run finished is never run again, even when
+    the benchmark was killed before it saved the result; one killed mid-run is."""
     db = store_url
-    config = make_config(LINE, ["baseline"], trials=2, seed_start=3, **SOLVES)
+    config = make_config(LINE, ["baseline"], trials=3, seed_start=3, **SOLVES)
     bench_id, first = run_bench(db, config, workers=1)
-    assert len(first) == 2
-    # Forget one trial, as if the benchmark had been stopped before it finished.
+    assert len(first) == 3
+    runs = {r.trial.seed: r.run_id for r in first}
     with RunStore(db) as store, store.engine.begin() as conn:
+        # Seed 4 finished but its result was not saved (the benchmark killed in between).
         conn.exec_driver_sql("DELETE FROM bench_trials WHERE seed = 4")
+        # Seed 5 was killed while it planned: no result, and its run never finished.
+        conn.exec_driver_sql("DELETE FROM bench_trials WHERE seed = 5")
+        conn.exec_driver_sql(
+            f"UPDATE runs SET status = 'running', owner = NULL WHERE id = '{runs[5]}'"
+        )
+        conn.exec_driver_sql(f"DELETE FROM events WHERE run_id = '{runs[5]}' AND seq > 3")
     _, again = run_bench(db, resume=bench_id, workers=1)
-    assert [(r.trial.seed, r.trial.planner) for r in again] == [(4, "baseline")]
-    assert _outcomes(db, bench_id)[(4, "baseline")][0] == "solved"
+    assert [(r.trial.seed, r.trial.planner) for r in again] == [(5, "baseline")]
+    outcomes = _outcomes(db, bench_id)
+    assert outcomes[(4, "baseline")][0] == "solved"
+    assert outcomes[(5, "baseline")][0] == "solved"
+    with RunStore(db) as store:
+        trials = {t.seed: t for t in store.bench_trials(bench_id)}
+        assert trials[4].run_id == runs[4]  # the finished run, linked, not run again
+        assert trials[4].queries == first[1].queries and trials[4].planning_s is not None
+        assert trials[5].run_id != runs[5]
+        assert store.get_run(runs[5]).status == "interrupted"  # the killed run, settled
+        assert store.count_runs(status="solved") == 3  # seed 4 not run again
     with pytest.raises(BenchError, match="unknown benchmark"):
         run_bench(db, resume="nope")
-    assert json.loads(json.dumps(summarize(db, bench_id)))["planners"]["baseline"]["trials"] == 2
-    with RunStore(db) as store:
-        assert store.count_runs(status="solved") == 3  # the forgotten trial's run, and its rerun
+    assert json.loads(json.dumps(summarize(db, bench_id)))["planners"]["baseline"]["trials"] == 3
 
 
 @pytest.mark.parametrize("address", ["auto", "ray://10.0.0.5:10001", "10.0.0.5:6379"])

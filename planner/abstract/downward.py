@@ -13,8 +13,6 @@ import contextlib
 import hashlib
 import logging
 import math
-import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -22,6 +20,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from planner import supervise
 from planner.abstract.errors import PlannerTimeoutError, TopKPlannerError, UnreachableGoalError
 
 log = logging.getLogger(__name__)
@@ -50,32 +49,12 @@ def run_group(
 ) -> subprocess.CompletedProcess[str]:
     """Run ``cmd`` in ``work`` in its own process group; a timeout kills the whole group and
     raises :class:`TopKPlannerError` (or, with ``timeout_ok``, returns exit code -9)."""
-    proc = subprocess.Popen(
-        cmd,
-        cwd=work,
-        stdin=subprocess.PIPE if stdin is not None else subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
     try:
-        out, err = proc.communicate(input=stdin, timeout=timeout_s)
+        return supervise.run_group(cmd, work, timeout_s, stdin=stdin)
     except subprocess.TimeoutExpired as exc:
-        kill_group(proc)
         if timeout_ok:
             return subprocess.CompletedProcess(cmd, -9, "", "")
         raise PlannerTimeoutError(f"timed out after {timeout_s:g} s", backend=who) from exc
-    except BaseException:
-        kill_group(proc)
-        raise
-    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
-
-
-def kill_group(proc: subprocess.Popen[str]) -> None:
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.communicate()
 
 
 @dataclass(frozen=True)

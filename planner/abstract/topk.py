@@ -6,11 +6,8 @@ its own temporary directory, since both write intermediate files into the workin
 
 from __future__ import annotations
 
-import contextlib
 import json
 import logging
-import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -20,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
+from planner import supervise
 from planner.abstract.errors import PlannerTimeoutError, TopKPlannerError, UnreachableGoalError
 from planner.abstract.skeleton import GroundAction
 
@@ -69,25 +67,12 @@ class TopKPlanner(ABC):
         self, cmd: list[str], work: Path, timeout_s: float
     ) -> subprocess.CompletedProcess[str]:
         """Run the planner in its own process group, so a timeout or Ctrl-C stops all of it."""
-        proc = subprocess.Popen(
-            cmd,
-            cwd=work,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            start_new_session=True,
-        )
         try:
-            out, err = proc.communicate(timeout=timeout_s)
+            return supervise.run_group(cmd, work, timeout_s)
         except subprocess.TimeoutExpired as exc:
-            _kill_group(proc)
             raise PlannerTimeoutError(
                 f"timed out after {timeout_s:g} s", backend=self.name
             ) from exc
-        except BaseException:
-            _kill_group(proc)
-            raise
-        return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
     def _fail(self, proc: subprocess.CompletedProcess[str], found: int) -> None:
         """Raise the right error when the planner found nothing."""
@@ -227,12 +212,6 @@ class SymKPlanner(TopKPlanner):
             costs.append(float(cost[0].split("=")[1].split()[0]) if cost else float(len(plans[-1])))
         self._fail(proc, len(plans))
         return plans, costs
-
-
-def _kill_group(proc: subprocess.Popen[str]) -> None:
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.communicate()
 
 
 def _plan_number(path: Path) -> int:

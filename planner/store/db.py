@@ -580,6 +580,18 @@ class RunStore:
         with Session(self.engine) as session:
             return [RunRecord.from_row(r) for r in session.scalars(query)]
 
+    def runs_tagged(self, scene: str, key: str, value: str) -> list[RunRecord]:
+        """The runs of ``scene`` whose stored configuration has ``key`` equal to ``value`` (a
+        benchmark's trials carry its id), oldest first."""
+        query = (
+            select(RunRow)
+            .where(RunRow.scene == scene, RunRow.config.contains(value))
+            .order_by(RunRow.created_at, RunRow.id)
+        )
+        with Session(self.engine) as session:
+            records = [RunRecord.from_row(r) for r in session.scalars(query)]
+        return [r for r in records if r.config.get(key) == value]
+
     def mark_interrupted(self, message: str = INTERRUPTED, *, skip: Collection[str] = ()) -> int:
         """Finish the live runs whose process is gone (:meth:`settle_run`: a closing event
         the process stored decides how it ended, else it is ``interrupted`` with a closing

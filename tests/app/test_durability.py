@@ -68,6 +68,12 @@ def _request(url: str, body: dict[str, Any] | None = None) -> Any:
         return json.load(response)
 
 
+# How long a killed server's workers may take to go before the test fails: they go within
+# moments (0.1 s measured, docs/experiments.md), but a busy machine may delay any process; far
+# less than the budgets of the runs they would otherwise plan on.
+ORPHAN_WAIT_S = 30.0
+
+
 def _stopped(pid: int) -> bool:
     """Gone, or exited and waiting to be reaped by whoever adopted it."""
     try:
@@ -269,7 +275,7 @@ def test_kill_9_of_server_and_workers_loses_nothing_served(scenes: Path, tmp_pat
             for pid in workers:
                 with contextlib.suppress(ProcessLookupError):  # it may have stopped already
                     os.kill(pid, signal.SIGKILL)
-        deadline = time.monotonic() + 2.0
+        deadline = time.monotonic() + ORPHAN_WAIT_S
         while not all(_stopped(pid) for pid in workers):
             assert time.monotonic() < deadline, f"workers {workers} outlived their server"
             time.sleep(0.02)
@@ -286,7 +292,7 @@ def test_kill_9_of_server_and_workers_loses_nothing_served(scenes: Path, tmp_pat
     print(f"kill -9 over {launched} runs ({kinds}): {statuses}")
 
 
-def test_a_killed_servers_worker_stops_within_2_s(scenes: Path, tmp_path: Path) -> None:
+def test_a_killed_servers_worker_stops_at_once(scenes: Path, tmp_path: Path) -> None:
     db, log = tmp_path / "runs.db", tmp_path / "serve.log"
     server = Server(db, scenes, log, max_running=1)
     run = server.api("/api/runs", {"scene": "line-far", "k": 2, "budget_s": 120})
@@ -301,7 +307,8 @@ def test_a_killed_servers_worker_stops_within_2_s(scenes: Path, tmp_path: Path) 
     server.kill()
     killed = time.monotonic()
     while not _stopped(worker):
-        assert time.monotonic() - killed < 2.0, "the worker outlived its server by 2 s"
+        # Its run's budget is 120 s: a worker that did not watch its server would plan on.
+        assert time.monotonic() - killed < ORPHAN_WAIT_S, "the worker outlived its server"
         time.sleep(0.01)
     served.join()
     with RunStore(db) as store:
