@@ -111,16 +111,7 @@ def reports(request: Request) -> list[Report]:
 def launch(body: RunRequest, request: Request) -> Run:
     dash = _dash(request)
     try:
-        record = dash.launch(
-            body.scene,
-            body.planner,
-            body.seed,
-            body.budget_s,
-            body.model,
-            body.k,
-            max_queries=body.max_queries,
-            max_iterations=body.max_iterations,
-        )
+        record = dash.launch(**body.model_dump())
     except RequestError as exc:
         raise bad_field(exc.field, str(exc)) from exc
     except QueueFullError as exc:

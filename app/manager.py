@@ -95,8 +95,10 @@ class RunManager:
         with self._lock:
             return len(self._workers), len(self._pending)
 
-    def submit(self, config: RunConfig, config_json: dict[str, Any]) -> str:
-        """Queue a run (recorded as ``queued`` at once); returns its id."""
+    def submit(self, config: RunConfig, shown: dict[str, Any] | None = None) -> str:
+        """Queue a run (recorded as ``queued`` at once, with its configuration and ``shown``,
+        what the page shows of it besides: a model's name); returns its id. The worker gets
+        ``config`` itself."""
         with self._lock:
             if self._closing:
                 raise QueueFullError("the server is shutting down")
@@ -108,7 +110,11 @@ class RunManager:
                     "finishes, or cancel one"
                 )
             run_id = self.store.create_run(
-                config.scene, config.seed, config.planner, config_json, status="queued"
+                config.scene,
+                config.seed,
+                config.planner,
+                {**asdict(config), **(shown or {})},
+                status="queued",
             )
             self.hub.open(run_id)
             self._pending.append((run_id, config))
@@ -171,7 +177,7 @@ class RunManager:
                 process = supervise.spawn(
                     worker_module.main,
                     run_id,
-                    asdict(config),
+                    config,
                     self.database,
                     send,
                     stop,

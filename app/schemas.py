@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from app.catalog import NAME
+from planner.api import MAX_BUDGET_S
 from planner.store import RunRecord
 
 PlannerName = Literal["baseline", "paper", "learned", "sequential"]
@@ -61,7 +62,9 @@ class RunRequest(BaseModel):
     scene: SceneName
     planner: PlannerName = "baseline"
     seed: Integer = Field(0, ge=0, le=2**31 - 1)
-    budget_s: float = Field(120.0, gt=0, le=3600, description="wall-clock seconds, top-k included")
+    budget_s: float = Field(
+        120.0, gt=0, le=MAX_BUDGET_S, description="wall-clock seconds, top-k included"
+    )
     model: ModelName | None = None
     k: Integer = Field(50, ge=1, le=1000, description="skeletons asked of the top-k planner")
     max_queries: Bound | None = Field(
@@ -371,7 +374,7 @@ class BenchRequest(BaseModel):
     )
     trials: Integer = Field(4, ge=1, le=10_000, description="seeds, each run by every planner")
     seed_start: Integer = Field(1000, ge=0, le=2**31 - 1)
-    budget_s: float = Field(60.0, gt=0, le=3600, description="seconds per trial")
+    budget_s: float = Field(60.0, gt=0, le=MAX_BUDGET_S, description="seconds per trial")
     model: ModelName | None = Field(None, description="the learned planners' model by name")
     workers: Integer = Field(2, ge=1, le=16, description="trials at once")
     order: Literal["auto", "plan", "model"] = "auto"

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -20,7 +19,7 @@ from app.settings import Settings
 from app.training import TrainingService
 from app.viewing import Viewer, ViewerService
 from planner.planners import get_planner
-from planner.runs import RunConfig
+from planner.runs import resolve_run
 from planner.store import RunRecord, RunStore
 
 if TYPE_CHECKING:
@@ -106,17 +105,11 @@ class Dashboard:
     # --- runs ---------------------------------------------------------------------------------
 
     def launch(
-        self,
-        scene: str,
-        planner: str,
-        seed: int,
-        budget_s: float,
-        model: str | None,
-        k: int,
-        *,
-        max_queries: int | None = None,
-        max_iterations: int | None = None,
+        self, *, scene: str, planner: str, model: str | None = None, **options: Any
     ) -> RunRecord:
+        """Queue a run; ``options`` are :class:`~planner.api.RunConfig` fields by name (seed,
+        budget_s, k, max_queries, ...: a run option added there and to the request reaches the
+        run with no change here). :class:`RequestError` names a field that is wrong."""
         try:
             scene_info = self.domains.scene(scene)
         except catalog.UnknownNameError as exc:
@@ -141,24 +134,18 @@ class Dashboard:
                     f"model {name!r} is for domain {fits.get(name)!r}, scene {scene!r} is "
                     f"{scene_info.domain!r} (models for it: {', '.join(fitting) or 'none'})",
                 )
-        db = self.settings.database_url  # a path or a URL (Path would mangle a URL's //)
-        config = RunConfig(
-            scene=scene,
-            seed=seed,
-            planner=planner,
-            k=k,
-            budget_s=budget_s,
-            model=str(model_path) if model_path is not None else None,
-            domain=scene_info.domain_ref,
-            # Learned with no model for the domain: priors from the runs stored here.
-            priors_db=db if learned and model_path is None else None,
-            max_queries=max_queries,
-            max_iterations=max_iterations,
-        )
-        data = asdict(config)
-        if model_path is not None:
-            data["model_name"] = name
-        run_id = self.manager.submit(config, data)
+        try:
+            config = resolve_run(
+                self.settings.database_url,  # a path or a URL (Path would mangle a URL's //)
+                scene=scene,
+                planner=planner,
+                model=str(model_path) if model_path is not None else None,
+                domain=scene_info.domain_ref,
+                **options,
+            )
+        except ValueError as exc:  # the request's checks are RunConfig's; this is a backstop
+            raise RequestError(_field_named(str(exc), list(options)), str(exc)) from exc
+        run_id = self.manager.submit(config, {"model_name": name} if model_path else {})
         return self.store.get_run(run_id)
 
     def query_counts(self, run_id: str) -> dict[str, dict[str, int]]:
@@ -172,3 +159,9 @@ class Dashboard:
             for p in sorted(self.reports_dir.glob("*.html"))
             if catalog.safe_name(p.stem)
         ]
+
+
+def _field_named(message: str, names: Any) -> str:
+    """The request field a RunConfig error message is about: the first option it names."""
+    found = next((n for n in names if n in message), None)
+    return found or ("budget_s" if message.startswith("budget") else "planner")

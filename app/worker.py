@@ -19,9 +19,12 @@ import logging
 import threading
 from multiprocessing.connection import Connection
 from multiprocessing.synchronize import Event as MpEvent
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.events import Event, event_to_dict
+
+if TYPE_CHECKING:
+    from planner.api import RunConfig
 
 log = logging.getLogger(__name__)
 
@@ -53,7 +56,7 @@ class _Pipe:
 
 def main(
     run_id: str,
-    config: dict[str, Any],
+    config: RunConfig,
     database: str,
     conn: Connection,
     stop: MpEvent,
@@ -66,7 +69,7 @@ def main(
         level=logging.WARNING, format="%(asctime)s %(levelname)s worker %(name)s: %(message)s"
     )
     from planner.api import CANCELLED_BY_USER
-    from planner.runs import RunConfig, preload_libraries, record_run
+    from planner.runs import preload_libraries, record_run
     from planner.store import RunStore
 
     def why_stopped() -> str:
@@ -79,9 +82,8 @@ def main(
         if not store.claim_run(run_id):
             log.warning("run %s is no longer running; not started", run_id)
             return
-        run_config = RunConfig(**config)
-        preload_libraries(run_config)
-        record_run(run_config, store, run_id, should_stop=stop.is_set, stop_reason=why_stopped)
+        preload_libraries(config)
+        record_run(config, store, run_id, should_stop=stop.is_set, stop_reason=why_stopped)
     except KeyboardInterrupt:
         log.warning("run %s interrupted", run_id)
     except Exception:

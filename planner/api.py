@@ -79,6 +79,9 @@ __all__ = [
 ]
 
 
+MAX_BUDGET_S = 86_400.0  # the longest budget of a run (a day), wherever a run is asked for
+
+
 @dataclass(frozen=True)
 class RunConfig:
     """One run: what to plan, with which planner, how long. Every run is reproducible from its
@@ -115,8 +118,10 @@ class RunConfig:
 
     def __post_init__(self) -> None:
         spec = get_planner(self.planner)  # ValueError names what is unknown
-        if not 0 < self.budget_s <= 86_400:
-            raise ValueError(f"budget must be between 0 and 86400 s, got {self.budget_s}")
+        if not 0 < self.budget_s <= MAX_BUDGET_S:
+            raise ValueError(
+                f"budget must be between 0 and {MAX_BUDGET_S:.0f} s, got {self.budget_s}"
+            )
         check_bound("max_queries", self.max_queries)
         check_bound("max_iterations", self.max_iterations)
         if self.c_explore is not None and not 0.0 <= self.c_explore <= 10.0:

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from planner import __version__
+from planner.api import MAX_BUDGET_S
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.experiment import (
     BENCH_KEY,
@@ -36,7 +37,6 @@ from planner.store import BenchTrialRecord, RunStore
 log = logging.getLogger(__name__)
 
 MAX_TRIALS = 10_000  # seeds per benchmark
-MAX_BUDGET_S = 3600.0
 
 
 class BenchError(ValueError):

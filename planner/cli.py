@@ -521,13 +521,14 @@ def _print_text(
 
 def cmd_plan(args: argparse.Namespace) -> int:
     from planner.api import solve
-    from planner.runs import RunConfig, preload_libraries, record_run
+    from planner.runs import preload_libraries, record_run, resolve_run
     from planner.store import RunStore, default_db_path
 
     # A bad scene or domain fails before anything is recorded.
     loaded, _ = problem_for_scene(args.scene, seed=args.seed, domain=args.domain)
     db = args.db or default_db_path()
-    config = RunConfig(
+    config = resolve_run(
+        db,
         scene=args.scene,
         seed=args.seed,
         planner=args.planner,
@@ -537,9 +538,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
         c_explore=args.c_explore,
         order=args.order,
         domain=_domain_ref(loaded, args.domain),
-        priors_db=str(db)
-        if args.model == PRIORS or (args.model is None and loaded.spec.model is None)
-        else None,
         skeletons=args.skeletons,
         max_queries=args.max_queries,
         max_iterations=args.max_iterations,

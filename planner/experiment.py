@@ -42,6 +42,12 @@ class Trial:
     # run that finished when its result could not be saved (its benchmark killed in between).
     bench_id: str | None = None
 
+    def run_fields(self) -> dict[str, Any]:
+        """The trial's fields that are :class:`~planner.api.RunConfig`'s (all but its bench)."""
+        fields = asdict(self)
+        del fields["bench_id"]
+        return fields
+
 
 @dataclass(frozen=True)
 class TrialResult:
@@ -94,24 +100,11 @@ def check_store_reachable(db: str | Path, ray_address: str | None) -> None:
 def run_trial(trial: Trial, db: str, run_id: str | None = None) -> TrialResult:
     """One recorded run (in the calling process), stored under ``run_id`` (default: a new id);
     a planner that raises makes a failed result."""
-    from planner.planners import PRIORS
-    from planner.runs import RunConfig, preload_libraries, record_run
+    from planner.runs import preload_libraries, record_run, resolve_run
     from planner.store import RunStore
 
     store = RunStore(db)
-    config = RunConfig(
-        scene=trial.scene,
-        seed=trial.seed,
-        planner=trial.planner,
-        budget_s=trial.budget_s,
-        model=trial.model,
-        order=trial.order,
-        domain=trial.domain,
-        # A learned trial with no model for its domain runs on the priors of this store.
-        priors_db=db if trial.model in (None, PRIORS) else None,
-        max_queries=trial.max_queries,
-        max_iterations=trial.max_iterations,
-    )
+    config = resolve_run(db, **trial.run_fields())
     preload_libraries(config)
     stored = asdict(config)
     if trial.bench_id is not None:

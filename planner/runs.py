@@ -12,6 +12,7 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from planner.api import RunConfig, RunResult, solve
@@ -35,8 +36,22 @@ __all__ = [
     "plan_summaries",
     "preload_libraries",
     "record_run",
+    "resolve_run",
     "run",
 ]
+
+
+def resolve_run(db: str | Path | None, **fields: Any) -> RunConfig:
+    """The one configuration of a run recorded into the store ``db``: the CLI (``tamp plan``),
+    the dashboard and benchmark trials each make theirs here, from :class:`RunConfig`'s own
+    fields (a ``ValueError`` names a bad one), and pass it whole to the process that runs it.
+
+    What is decided here and nowhere else: a run that plans on per-stream priors (learned with
+    no model for its domain, or ``model="priors"``) takes them from the queries recorded in
+    its own store (:func:`planner.planners.load_predictor` reads ``priors_db`` only then)."""
+    if "priors_db" in fields:
+        raise TypeError("priors_db is the run's store: give db")
+    return RunConfig(**fields, priors_db=None if db is None else str(db))
 
 
 def preload_libraries(config: RunConfig) -> None:

@@ -28,6 +28,7 @@ from schemathesis.specs.openapi.checks import positive_data_acceptance
 from app.catalog import NAME
 from app.main import create_app
 from app.settings import Settings
+from planner.api import MAX_BUDGET_S
 from planner.store import FINAL_STATUSES, RunStore
 
 _DB = Path(tempfile.mkdtemp(prefix="tamp-fuzz-")) / "runs.db"
@@ -84,7 +85,7 @@ def _small_benchmark(body: Any) -> Any:
     trials, budget = body.get("trials", 1), body.get("budget_s", 5.0)
     if type(trials) is int and 1 <= trials <= 10_000:
         body = {**body, "trials": min(trials, 2)}
-    if type(budget) in (int, float) and 0 < budget <= 3600:
+    if type(budget) in (int, float) and 0 < budget <= MAX_BUDGET_S:
         body = {**body, "budget_s": min(budget, 5.0)}
     return body
 
@@ -99,7 +100,7 @@ def _small_line_launch(body: Any) -> Any:
     k, budget = body.get("k", 3), body.get("budget_s", 5.0)
     if type(k) is int and 1 <= k <= 1000:
         body["k"] = min(k, 3)
-    if type(budget) in (int, float) and 0 < budget <= 3600:
+    if type(budget) in (int, float) and 0 < budget <= MAX_BUDGET_S:
         body["budget_s"] = min(budget, 5.0)
     return body
 
