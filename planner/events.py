@@ -41,9 +41,10 @@ from typing import (
     get_type_hints,
 )
 
+from planner.status import FINISH_STATUSES
+
 log = logging.getLogger(__name__)
 
-FINISH_STATUSES = ("solved", "failed", "timeout")  # RunFinished.status values
 
 _BASE_FIELDS = ("run_id", "seq", "t")
 _PLAN_KEYS = (("index", int), ("cost", float), ("actions", list[str]), ("streams", list[str]))

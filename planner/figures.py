@@ -28,21 +28,11 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from planner.store import LIVE_STATUSES, RUN_STATUSES
+from planner.status import LIVE_STATUSES, RUN_STATUSES, STATUS_TEXT
 
 # --- run statuses ------------------------------------------------------------------------------
 
-STATUS_TEXT: dict[str, str] = {
-    "queued": "waiting for a worker",
-    "running": "planning now",
-    "solved": "found a plan within its budget",
-    "failed": "stopped on an error, or its plan did not validate",
-    "timeout": "no plan within its budget",
-    "cancelled": "cancelled by a user, or stopped by the server's shutdown",
-    "interrupted": "its process stopped before it finished",
-}
-if tuple(STATUS_TEXT) != RUN_STATUSES:
-    raise RuntimeError("planner.figures: a run status without its line, or out of order")
+# The names and their lines are planner.status's; the page reads them from here.
 
 # --- stream queries ----------------------------------------------------------------------------
 

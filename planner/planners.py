@@ -71,6 +71,7 @@ from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
 from planner.search.queries import remembered
 from planner.search.tree import Node
+from planner.status import SearchStatus
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
 
@@ -161,7 +162,7 @@ class PlanningTask:
 class PlannerOutcome:
     """How a planner ended, and what it made."""
 
-    status: str  # solved, timeout, failed, cancelled
+    status: SearchStatus
     bound: BoundPlan | None
     execution_s: float | None  # trajectory seconds of the bound plan
     oracle_s: float | None  # top-k + successful queries on the solution branch
@@ -615,7 +616,7 @@ class SequentialPlanner(Planner):
                 task.samplers, bound.skeleton.actions, bound.skeleton.stream_plan, bound.values
             )
             oracle_s = recorder.solved(execution_s, skeleton_seconds(task))
-        status = "solved" if bound is not None else "timeout"
+        status: SearchStatus = "solved" if bound is not None else "timeout"
         return PlannerOutcome(
             status, bound, execution_s, oracle_s, queries, tried, ended_by=ended_by
         )

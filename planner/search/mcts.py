@@ -16,7 +16,7 @@ import logging
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol
+from typing import Any, Protocol
 
 from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
@@ -35,12 +35,11 @@ from planner.search.feedback import InstanceKey, InstanceRecords
 from planner.search.queries import query_context, query_identity, remembered
 from planner.search.reuse import reusable_streams
 from planner.search.tree import ROOT, Node, Tree
+from planner.status import SearchStatus
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
 
 log = logging.getLogger(__name__)
-
-Status = Literal["solved", "timeout", "failed", "cancelled"]
 
 
 class Policy(Protocol):
@@ -178,7 +177,7 @@ class BaselinePolicy:
 
 @dataclass
 class SearchResult:
-    status: Status
+    status: SearchStatus
     node_id: int | None  # the fully bound node, when solved
     plan_index: int | None
     values: dict[str, Any]  # optimistic object -> value along the solution branch
@@ -620,7 +619,7 @@ class TreeSearch:
         while self._plans_open < first:
             self.open_plan(self._plans_open)
         iterations = 0
-        status: Status = "timeout"
+        status: SearchStatus = "timeout"
         ended_by: str | None = None
         solution: Node | None = None
         while True:
