@@ -338,11 +338,22 @@ class Trace:
         """Nodes, the root included."""
         return len(self.order)
 
+    @property
+    def shown(self) -> int:
+        """Nodes a view shows: every announced one, the root once it has children (as the
+        page counts them)."""
+        root = self.nodes[self.root]
+        return 0 if len(self.order) == 1 and not root.announced else len(self.order)
+
     def __getitem__(self, node_id: int) -> TraceNode:
         return self.nodes[node_id]
 
     def __contains__(self, node_id: object) -> bool:
         return node_id in self.nodes
+
+    def pending(self, node_id: int) -> StreamQueried | None:
+        """The query that will make node ``node_id``, before its node_added comes."""
+        return self._pending.get(node_id)
 
     def ordered(self) -> list[TraceNode]:
         """Every node as they were made, the root first."""
