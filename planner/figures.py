@@ -31,7 +31,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from planner.events import EVENT_TYPES
+from planner.events import EVENT_TYPES, StreamQueried
 from planner.status import (
     BENCH_STATUSES,
     LIVE_STATUSES,
@@ -86,7 +86,7 @@ def count_queries(events: Iterable[Mapping[str, Any]]) -> dict[str, QueryCount]:
     """Stream -> its :class:`QueryCount`, from a run's events (other types are skipped)."""
     out: dict[str, QueryCount] = {}
     for e in events:
-        if e.get("type") != "stream_queried":
+        if e.get("type") != StreamQueried.type:
             continue
         count = out.setdefault(str(e["stream"]), QueryCount())
         kind = query_kind(e)

@@ -331,8 +331,6 @@ class TreeSearch:
         self.answered = 0
         self.iterations = 0
 
-    # --- events ------------------------------------------------------------------------------
-
     # --- steps: a search is these two, in the order its policy picks (:meth:`run`); a caller
     # may also take them by hand, as the tests do ----------------------------------------------
 
