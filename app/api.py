@@ -36,13 +36,12 @@ from app.schemas import (
     RunPage,
     RunRequest,
     SceneOut,
-    StatusName,
     ViewerRequest,
     ViewerShown,
     ViewerState,
 )
 from app.services import Dashboard
-from planner.store import LIVE_STATUSES
+from planner.status import LIVE_STATUSES, RunStatus
 
 log = logging.getLogger(__name__)
 
@@ -122,7 +121,7 @@ def launch(body: RunRequest, request: Request) -> Run:
 @router.get("/runs")
 def list_runs(
     request: Request,
-    status: StatusName | None = None,
+    status: RunStatus | None = None,
     scene: Annotated[str | None, Query(max_length=100)] = None,
     planner: PlannerName | None = None,
     limit: Annotated[int, Query(ge=1, le=500)] = 50,

@@ -1,11 +1,11 @@
 """Two runs side by side: their search trees, where their seconds went, their stream queries,
 their progress in time, and the first point where the two searches chose differently.
 
-A run's tree is read from its stored events (``node_added``, ``model_prediction``,
-``solution_found``, ``abstract_plans_found``, ``stream_queried``) without building event
-objects, into columns the page draws directly (:class:`Tree`); a finished run's tree is kept
-while the server runs. The time split and the query table are :mod:`planner.report`'s, the
-same code as ``tamp report``.
+A run's tree is :mod:`planner.trace`'s fold of its stored events (``node_added``,
+``model_prediction``, ``solution_found``, ``abstract_plans_found``, ``skeletons_added``: not
+the queries' events, half a tree's bytes), served to the page in columns it draws directly
+(:class:`Columns`); a finished run's tree is kept while the server runs. The time split and
+the query table are :mod:`planner.report`'s, the same code as ``tamp report``.
 
 Where two searches part: every node gets a key that says which choice made it, without its
 sampled values (those differ whenever the samplers' random draws do): a stream plan is its
@@ -24,17 +24,22 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner import figures
+from planner.events import (
+    AbstractPlansFound,
+    ModelPrediction,
+    NodeAdded,
+    SkeletonsAdded,
+    SolutionFound,
+)
 from planner.report import query_summary, run_time_split
-from planner.store import LIVE_STATUSES, QueryOutcome, RunRecord, RunStore
+from planner.status import LIVE_STATUSES
+from planner.store import QueryOutcome, RunRecord, RunStore
+from planner.trace import Trace, TraceNode, fold
 
 # The events a tree is read from; the queries' times come from their rows
 # (RunStore.query_times), so the queries' events, half a tree's bytes, are not parsed.
-TREE_TYPES = (
-    "abstract_plans_found",
-    "skeletons_added",
-    "node_added",
-    "model_prediction",
-    "solution_found",
+TREE_TYPES = tuple(
+    c.type for c in (AbstractPlansFound, SkeletonsAdded, NodeAdded, ModelPrediction, SolutionFound)
 )
 MAX_CURVE_POINTS = 1000  # points of a run's queries-against-seconds curve
 KEPT_TREES = 8  # finished runs' trees kept in memory
@@ -43,7 +48,27 @@ KEPT_COMPARISONS = 8  # comparisons of two finished runs kept in memory
 
 @dataclass(frozen=True)
 class Tree:
-    """One run's search tree in columns, in the order the nodes were made (the root first)."""
+    """One run's search tree (:class:`planner.trace.Trace`) and when its queries were made."""
+
+    run_id: str
+    trace: Trace
+    query_t: list[float]  # t of each query a sampler answered (reused ones left out)
+
+    @property
+    def size(self) -> int:
+        """Nodes, the root included."""
+        return len(self.trace)
+
+    @property
+    def plans_t(self) -> float:
+        """t of abstract_plans_found: the skeleton source's first seconds (0: none yet)."""
+        return self.trace.plans_t or 0.0
+
+
+@dataclass(frozen=True)
+class Columns:
+    """A tree in columns, in the order the nodes were made (the root first): what the page's
+    compare view draws (GET /api/runs/{id}/tree)."""
 
     run_id: str
     ids: list[int]
@@ -57,73 +82,30 @@ class Tree:
     labels: list[str]
     solution: int | None
     plan_list: list[dict[str, Any]]  # abstract_plans_found's plans, then skeletons_added's
-    query_t: list[float]  # t of each query a sampler answered (reused ones left out)
-    plans_t: float = 0.0  # t of abstract_plans_found: the skeleton source's first seconds
-    later_skeletons_s: float = 0.0  # seconds of the skeletons the search asked for after
-
-    @property
-    def size(self) -> int:
-        return len(self.ids)
 
 
 def read_tree(store: RunStore, run_id: str) -> Tree:
     """KeyError for an unknown run."""
-    events = store.events_of(run_id, TREE_TYPES)
-    ids: list[int] = []
-    parents: list[int | None] = []
-    plans: list[int] = []
-    depths: list[int] = []
-    streams: list[int] = []
-    success: list[bool] = []
-    labels: list[str] = []
+    return Tree(run_id, fold(store.events_of(run_id, TREE_TYPES)), store.query_times(run_id))
+
+
+def columns(tree: Tree) -> Columns:
+    nodes = tree.trace.ordered()
     names: dict[str, int] = {}
-    q: dict[int, float] = {}
-    solution: int | None = None
-    plan_list: list[dict[str, Any]] = []
-    query_t = store.query_times(run_id)
-    plans_t: float | None = None
-    later = 0.0
-    root, root_label = 0, "root"  # the search does not announce its root; a test may
-    for e in events:
-        kind = e["type"]
-        if kind == "node_added" and e.get("parent_id") is None:
-            root, root_label = int(e["node_id"]), str(e.get("label") or "root")
-        elif kind == "node_added":
-            stream = e.get("stream")
-            ids.append(int(e["node_id"]))
-            parents.append(int(e["parent_id"]))
-            plans.append(int(e.get("plan_index", -1)))
-            depths.append(int(e.get("depth", 0)))
-            streams.append(-1 if stream is None else names.setdefault(str(stream), len(names)))
-            success.append(bool(e.get("success", True)))
-            labels.append(str(e.get("label", "")))
-        elif kind == "model_prediction":
-            q[int(e["node_id"])] = float(e["q"])
-        elif kind == "solution_found":
-            solution = int(e["node_id"])
-        elif kind == "abstract_plans_found" and plans_t is None:
-            plan_list = list(e.get("plans", []))
-            plans_t = float(e["t"])
-        elif kind == "skeletons_added":  # more skeletons during the search, indices following
-            plan_list += list(e.get("plans", []))
-            later += float(e.get("seconds", 0.0))
-    ids.insert(0, root)  # the root first: node i > 0 is the i-th node made
-    return Tree(
-        run_id=run_id,
-        ids=ids,
-        parents=[None, *parents],
-        plans=[-1, *plans],
-        depths=[0, *depths],
-        streams=[-1, *streams],
+    solution = tree.trace.solution
+    return Columns(
+        run_id=tree.run_id,
+        ids=[n.id for n in nodes],
+        parents=[n.parent for n in nodes],
+        plans=[n.plan_index for n in nodes],
+        depths=[n.depth for n in nodes],
+        streams=[-1 if n.stream is None else names.setdefault(n.stream, len(names)) for n in nodes],
         stream_names=list(names),
-        success=[True, *success],
-        q=[q.get(i) for i in ids],
-        labels=[root_label, *labels],
-        solution=solution,
-        plan_list=plan_list,
-        query_t=query_t,
-        plans_t=plans_t or 0.0,
-        later_skeletons_s=later,
+        success=[n.success for n in nodes],
+        q=[n.q for n in nodes],
+        labels=[n.label for n in nodes],
+        solution=None if solution is None else solution.node_id,
+        plan_list=tree.trace.plans,
     )
 
 
@@ -191,40 +173,34 @@ def choice_keys(tree: Tree, intern: dict[tuple[Any, ...], int]) -> list[int]:
     key_of: dict[int, int] = {}
     children: dict[int, int] = {}
     out: list[int] = []
-    actions = {
-        int(p.get("index", i)): tuple(p.get("actions", ())) for i, p in enumerate(tree.plan_list)
-    }
-    for i, node in enumerate(tree.ids):
-        parent = tree.parents[i]
-        if parent is None:
-            key_of[node] = intern.setdefault(("root",), len(intern))
+    actions = {int(p["index"]): tuple(p["actions"]) for p in tree.trace.plans}
+    for node in tree.trace.ordered():
+        if node.parent is None:
+            key_of[node.id] = intern.setdefault(("root",), len(intern))
             continue
-        parent_key = key_of.get(parent, intern.setdefault(("unseen", parent), len(intern)))
-        ordinal = children.get(parent, 0)
-        children[parent] = ordinal + 1
-        if tree.streams[i] < 0:  # a stream plan: which plan it is
-            plan = tree.plans[i]
-            local: tuple[Any, ...] = ("plan", actions.get(plan, ("#", plan)))
+        parent_key = key_of[node.parent]  # the fold has every parent before its children
+        ordinal = children.get(node.parent, 0)
+        children[node.parent] = ordinal + 1
+        if node.stream is None:  # a stream plan: which plan it is
+            local: tuple[Any, ...] = ("plan", actions.get(node.plan_index, ("#", node.plan_index)))
         else:
-            local = (tree.stream_names[tree.streams[i]], ordinal)
+            local = (node.stream, ordinal)
         key = intern.setdefault((parent_key, local), len(intern))
-        key_of[node] = key
+        key_of[node.id] = key
         out.append(key)
     return out
 
 
-def _node(tree: Tree, i: int) -> dict[str, Any]:
-    """Node ``i`` (an index into the tree's columns) as the page names it."""
-    parent = tree.parents[i]
-    stream = tree.stream_names[tree.streams[i]] if tree.streams[i] >= 0 else None
+def _node(node: TraceNode) -> dict[str, Any]:
+    """A node as the page names it."""
     return {
-        "node_id": tree.ids[i],
-        "parent_id": parent,
-        "plan_index": tree.plans[i],
-        "depth": tree.depths[i],
-        "stream": stream,
-        "success": tree.success[i],
-        "label": tree.labels[i],
+        "node_id": node.id,
+        "parent_id": node.parent,
+        "plan_index": node.plan_index,
+        "depth": node.depth,
+        "stream": node.stream,
+        "success": node.success,
+        "label": node.label,
     }
 
 
@@ -242,7 +218,7 @@ def _nodes(n: int) -> str:
 
 
 def _actions(tree: Tree) -> list[Any]:
-    return [p.get("actions") for p in tree.plan_list]
+    return [p["actions"] for p in tree.trace.plans]
 
 
 def divergence(a: Tree, b: Tree, name_a: str = "A", name_b: str = "B") -> dict[str, Any]:
@@ -260,12 +236,13 @@ def divergence(a: Tree, b: Tree, name_a: str = "A", name_b: str = "B") -> dict[s
         }
     intern: dict[tuple[Any, ...], int] = {}
     keys_a, keys_b = choice_keys(a, intern), choice_keys(b, intern)
+    nodes_a, nodes_b = a.trace.ordered(), b.trace.ordered()
     n = min(len(keys_a), len(keys_b))
     same = next((i for i in range(n) if keys_a[i] != keys_b[i]), n)
     outcome = None
     for i in range(same):
-        if a.success[i + 1] != b.success[i + 1]:
-            na, nb = _node(a, i + 1), _node(b, i + 1)
+        if nodes_a[i + 1].success != nodes_b[i + 1].success:
+            na, nb = _node(nodes_a[i + 1]), _node(nodes_b[i + 1])
             outcome = {
                 "index": i,
                 "a": na,
@@ -281,7 +258,7 @@ def divergence(a: Tree, b: Tree, name_a: str = "A", name_b: str = "B") -> dict[s
         kind, node_a, node_b = "identical", None, None
     elif same == n:
         longer, name = (a, name_a) if len(keys_a) > len(keys_b) else (b, name_b)
-        node = _node(longer, same + 1)
+        node = _node((nodes_a if longer is a else nodes_b)[same + 1])
         text = (
             f"the two searches made the same {_nodes(same)}; then only {name} went on: "
             + _describe(name, node)
@@ -290,7 +267,7 @@ def divergence(a: Tree, b: Tree, name_a: str = "A", name_b: str = "B") -> dict[s
         node_a = node if longer is a else None
         node_b = node if longer is b else None
     else:
-        node_a, node_b = _node(a, same + 1), _node(b, same + 1)
+        node_a, node_b = _node(nodes_a[same + 1]), _node(nodes_b[same + 1])
         text = (
             f"after {_nodes(same)} made alike, {_describe(name_a, node_a)}, while "
             f"{_describe(name_b, node_b)}"
@@ -298,8 +275,8 @@ def divergence(a: Tree, b: Tree, name_a: str = "A", name_b: str = "B") -> dict[s
         kind = "choice"
     if plans_differ:
         text += (
-            f"; the top-k planner gave them different abstract plans ({len(a.plan_list)} and "
-            f"{len(b.plan_list)})"
+            f"; the top-k planner gave them different abstract plans ({len(a.trace.plans)} and "
+            f"{len(b.trace.plans)})"
         )
     return {
         "kind": kind,
@@ -330,7 +307,7 @@ def curve(tree: Tree, limit: int = MAX_CURVE_POINTS) -> dict[str, list[float]]:
 def q_scale(trees: Sequence[Tree]) -> tuple[float, float] | None:
     """One colour scale for several trees (:func:`planner.figures.q_scale` of every predicted
     Q in them: the page's own scale, over both)."""
-    return figures.q_scale(q for tree in trees for q in tree.q if q is not None)
+    return figures.q_scale(q for tree in trees for q in tree.trace.predictions().values())
 
 
 def time_split(
@@ -345,7 +322,7 @@ def time_split(
     planning = record.planning_s
     if planning is None:
         planning = max([plans_at, *tree.query_t[-1:]])
-    split = run_time_split(planning, plans_at, outcomes, search_cpu_s, tree.later_skeletons_s)
+    split = run_time_split(planning, plans_at, outcomes, search_cpu_s, tree.trace.later_skeletons_s)
     return {
         **split,
         "execution_s": record.execution_s,

@@ -32,6 +32,7 @@ from app.errors import RequestError
 from planner.bench import BenchConfig
 from planner.horizon import Point, scene_goal, summary_points
 from planner.planners import get_planner
+from planner.status import BenchStatus
 
 if TYPE_CHECKING:
     from app.benchmarks import BenchInfo, BenchService
@@ -40,7 +41,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 KEPT_POINTS = 512  # benchmarks whose points are kept while their trials and status are unchanged
-SHOWN = ("done", "running")  # statuses of the benchmarks a series is drawn from
+SHOWN: tuple[BenchStatus, ...] = ("done", "running")  # benchmarks a series is drawn from
 
 
 # --- the answer ---------------------------------------------------------------------------------

@@ -9,10 +9,10 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from app.catalog import NAME
 from planner.api import MAX_BUDGET_S
+from planner.status import BenchStatus, RunStatus, TrainStatus
 from planner.store import RunRecord
 
 PlannerName = Literal["baseline", "paper", "learned", "sequential"]
-StatusName = Literal["queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted"]
 
 MAX_SEQ = 2**31 - 1  # event numbers and steps: far more than any run has
 MAX_BOUND = 2**31 - 1  # a run's bound on queries or iterations: far more than any run makes
@@ -84,7 +84,7 @@ class Run(BaseModel):
     scene: str
     seed: int
     planner: str
-    status: str
+    status: RunStatus
     created_at: datetime
     finished_at: datetime | None
     planning_s: float | None
@@ -407,7 +407,7 @@ class BenchOut(BaseModel):
     budget_s: float
     model: str | None
     order: str
-    status: str = Field(description="running, done, interrupted or cancelled (both resumable)")
+    status: BenchStatus = Field(description="interrupted and cancelled are resumable")
     created_at: datetime
     finished_at: datetime | None
     done: int = Field(description="trials finished")
@@ -456,7 +456,7 @@ class TrainJobOut(BaseModel):
     queries: int
     seed: int
     epochs: int
-    status: Literal["running", "done", "failed"]
+    status: TrainStatus
     created_at: datetime
     finished_at: datetime | None
     progress: float

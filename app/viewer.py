@@ -336,9 +336,9 @@ class RunViewer:
             drawn = sum(self._shown.get(layer, 0) for layer in fold.ghosts)
             return {
                 "events": fold.events,
-                "nodes": len(fold.nodes),
+                "nodes": fold.trace.shown,
                 "failed": fold.failed,
-                "predictions": len(fold.q),
+                "predictions": len(fold.trace.predictions()),
                 "skipped": fold.skipped,
                 "hidden": total - drawn,
                 "focus": -1 if self._focus is None else self._focus,
@@ -557,7 +557,7 @@ class RunViewer:
             and hook is not None
             and problem is not None
             and loaded is not None
-            and fold.solution is not None
+            and fold.trace.solution is not None
         ):
             if plan.get("scene", scene) != scene or plan.get("seed", seed) != seed:
                 log.warning(
@@ -589,7 +589,7 @@ class RunViewer:
         self._play.icon = viser.Icon.PLAYER_PAUSE if self._playing else viser.Icon.PLAYER_PLAY
         self._time.disabled = anim is None
         if anim is None:
-            found = self._fold is not None and self._fold.solution is not None
+            found = self._fold is not None and self._fold.trace.solution is not None
             _set_markdown(
                 self._plan_note,
                 "A plan was found; it plays here once its plan file is given."
@@ -750,7 +750,7 @@ class RunViewer:
                 self._apply_visibility()
             self._set_status(self._status_text(fold))
             _set_markdown(self._legend, _legend_text(fold))
-            if fold.solution is not None and self._anim is None:
+            if fold.trace.solution is not None and self._anim is None:
                 self._update_plan_gui()
         # A big tree takes a while to draw: live redraws then come less often.
         spent = time.perf_counter() - start
@@ -928,14 +928,14 @@ class RunViewer:
         node = self._focus
         self._focus_bodies = {}
         self._focus_at = None
-        if node is None or node not in fold.nodes:
+        if node is None or node not in fold.trace:
             self._shown["focus_markers"] = self._shown["branch_markers"] = 0
             _set_markdown(self._selection, self._selection_text(fold))
             self._pose_bodies()
             return
         hook = self._loaded.spec.view if self._loaded is not None else None
         own = fold.markers_of(node)
-        branch = [m for n in fold.branch(node)[:-1] for m in fold.markers_of(n)]
+        branch = [m for n in fold.trace.branch(node)[:-1] for m in fold.markers_of(n)]
         if isinstance(hook, FocusView) and self._problem is not None:
             try:
                 focus = hook.focus(fold.branch_queries(node), self._problem)
@@ -953,7 +953,7 @@ class RunViewer:
         if where is not None:
             self._layers["/focus/label"] = self._server.scene.add_label(
                 "/focus/label",
-                f"#{node} {fold.labels.get(node, '')}",
+                f"#{node} {fold.label(node)}",
                 position=(where[0], where[1], where[2] + 0.12),
                 anchor="bottom-center",
                 font_screen_scale=0.8,
@@ -1001,7 +1001,7 @@ class RunViewer:
                 )
             node = ghosts[index].node_id
             count = 1 if self._picked is None else self._picked.count + 1
-            self._picked = Picked(node, fold.labels.get(node, ""), count, self._run)
+            self._picked = Picked(node, fold.label(node), count, self._run)
             log.info("viewer: ghost of node %d clicked", node)
             _set_markdown(self._selection, self._selection_text(fold))
 
@@ -1009,9 +1009,9 @@ class RunViewer:
         lines = []
         if self._focus is not None:
             node = self._focus
-            q = fold.q.get(node)
+            q = fold.trace[node].q if node in fold.trace else None
             lines.append(
-                f"**node #{node}** · {fold.labels.get(node, 'not in the tree at this step')}"
+                f"**node #{node}** · {fold.label(node, 'not in the tree at this step')}"
                 + (f" · Q {q:.1f} s" if q is not None else "")
             )
             if self._focus_bodies:
@@ -1053,7 +1053,7 @@ class RunViewer:
     def _draw_tree(self, fold: SearchFold) -> int:
         """The tree's node-link drawing on its panel; returns the nodes drawn."""
         panel = self._panel
-        layout = tree_layout(fold.nodes)
+        layout = tree_layout(fold.trace)
         names = ("/tree/nodes", "/tree/edges", "/tree/solution", "/tree/title")
         if panel is None or not layout:
             for name in names:
@@ -1068,10 +1068,10 @@ class RunViewer:
         }
         colors = fold.colors(ids)
         for i, n in enumerate(ids):
-            node = fold.nodes[n]
+            node = fold.trace[n]
             if not node.success:
                 colors[i] = FAILED_RGB
-            elif node.parent_id is None:
+            elif node.parent is None:
                 colors[i] = ROOT_RGB
         scene = self._server.scene
         self._layers["/tree/nodes"] = scene.add_point_cloud(
@@ -1085,7 +1085,7 @@ class RunViewer:
         color_of = dict(zip(ids, colors, strict=True))
         edges: list[tuple[tuple[float, float, float], tuple[float, float, float], int]] = []
         for n in ids:
-            parent = fold.nodes[n].parent_id
+            parent = fold.trace[n].parent
             if parent is not None and parent in where:
                 edges.append((where[parent], where[n], n))
         if edges:
@@ -1097,7 +1097,7 @@ class RunViewer:
             )
         else:
             self._drop("/tree/edges")
-        path = [n for n in fold.solution_path() if n in where]
+        path = [n for n in fold.trace.solution_path() if n in where]
         if len(path) > 1:
             self._layers["/tree/solution"] = scene.add_line_segments(
                 "/tree/solution",
@@ -1109,7 +1109,7 @@ class RunViewer:
             self._drop("/tree/solution")
         self._layers["/tree/title"] = scene.add_label(
             "/tree/title",
-            f"search tree: {len(fold.nodes)} nodes, {fold.failed} failed",
+            f"search tree: {fold.trace.shown} nodes, {fold.failed} failed",
             position=(panel.x, panel.y_left - panel.width / 2, panel.top + 0.15),
             anchor="bottom-center",
         )
@@ -1129,8 +1129,9 @@ class RunViewer:
         lines = [
             f"**{self._scene}** · seed {key[1] if key else 0} · "
             f"step {fold.events - 1} ({fold.events} events)",
-            f"nodes {len(fold.nodes)} · failed queries {fold.failed} · "
-            f"predictions {len(fold.q)}" + (" · **solved**" if fold.solution is not None else ""),
+            f"nodes {fold.trace.shown} · failed queries {fold.failed} · "
+            f"predictions {len(fold.trace.predictions())}"
+            + (" · **solved**" if fold.trace.solution is not None else ""),
         ]
         if counts:
             lines.append("ghosts: " + ", ".join(f"{n} {layer}" for layer, n in counts.items()))

@@ -60,6 +60,7 @@ from planner.planners import (
 from planner.plans import execution_note, plan_to_dict, validate
 from planner.search.binding import BoundPlan
 from planner.search.bounds import SearchBounds, check_bound, time_reached
+from planner.status import SearchStatus
 from planner.streams.runtime import QueryResult, StreamRuntime
 
 log = logging.getLogger(__name__)
@@ -164,7 +165,7 @@ class RunConfig:
 class RunResult:
     run_id: str
     config: RunConfig
-    status: str  # solved, timeout, failed, cancelled
+    status: SearchStatus
     bound: BoundPlan | None
     planning_s: float  # wall seconds from start (top-k included) to the bound plan or the end
     topk_s: float  # wall seconds of the skeleton source (every batch): the planning not searched
@@ -199,7 +200,7 @@ class PlanResult:
     message: str = ""  # the validation's message, or why there is no plan
 
     @property
-    def status(self) -> str:
+    def status(self) -> SearchStatus:
         """The search's status, or failed when its plan does not validate."""
         return "failed" if self.valid is False else self.result.status
 

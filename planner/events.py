@@ -41,9 +41,10 @@ from typing import (
     get_type_hints,
 )
 
+from planner.status import FINISH_STATUSES
+
 log = logging.getLogger(__name__)
 
-FINISH_STATUSES = ("solved", "failed", "timeout")  # RunFinished.status values
 
 _BASE_FIELDS = ("run_id", "seq", "t")
 _PLAN_KEYS = (("index", int), ("cost", float), ("actions", list[str]), ("streams", list[str]))
@@ -561,6 +562,50 @@ def event_from_dict(data: dict[str, Any]) -> Event:
     if extra:
         raise ValueError(f"event {name!r} has unknown field(s): {', '.join(extra)}")
     return cls(**{n: data[n] for n in names if n in data})
+
+
+_DEFAULTS: dict[type[_EventBase], tuple[tuple[str, Callable[[], Any] | None], ...]] = {}
+
+
+def _defaults(cls: type[_EventBase]) -> tuple[tuple[str, Callable[[], Any] | None], ...]:
+    """(field name, what makes its default; None: no default) of an event class."""
+    out = _DEFAULTS.get(cls)
+    if out is None:
+        made: list[tuple[str, Callable[[], Any] | None]] = []
+        for f in dataclasses.fields(cls):
+            if f.default is not dataclasses.MISSING:
+                made.append((f.name, _constant(f.default)))
+            elif f.default_factory is not dataclasses.MISSING:
+                made.append((f.name, f.default_factory))
+            else:
+                made.append((f.name, None))
+        out = _DEFAULTS[cls] = tuple(made)
+    return out
+
+
+def _constant(value: Any) -> Callable[[], Any]:
+    return lambda: value
+
+
+def event_from_stored(data: dict[str, Any]) -> Event:
+    """An event from the dict of one the store wrote, without checking its fields again (each
+    was checked when the event was made, before it was stored): a few times cheaper than
+    :func:`event_from_dict` for a whole tree. A field added since the event was stored takes
+    its default. ValueError for an unknown type or a field without a value."""
+    name = data.get("type")
+    cls = EVENT_TYPES.get(name) if isinstance(name, str) else None
+    if cls is None:
+        raise ValueError(f"unknown event type {name!r} (known: {', '.join(EVENT_TYPES)})")
+    event = object.__new__(cls)
+    for field_name, default in _defaults(cls):
+        if field_name in data:
+            value = data[field_name]
+        elif default is not None:
+            value = default()
+        else:
+            raise ValueError(f"event {name!r} is missing field {field_name!r}")
+        object.__setattr__(event, field_name, value)
+    return event
 
 
 def event_from_json(text: str | bytes) -> Event:

@@ -5,7 +5,10 @@ The dashboard's page (``static/``), its 3D view (``app/viewer.py``), the compare
 reads them from ``/generated/definitions.js``, which :func:`definitions` makes (never a copy in
 JavaScript):
 
-- **Run statuses**: their names, in order, which are still live, and one line each.
+- **Names**: of every event type (:mod:`planner.events`) and of every status, a run's, a
+  benchmark's and a training job's (:mod:`planner.status`, with one line for each run
+  status), as ``EVENT.NODE_ADDED`` and ``STATUS.RUNNING`` on the page: its fold of events
+  (``static/tree.js``) and its checks of statuses use these, never literals.
 - **Stream queries**: a ``stream_queried`` event is one of three kinds. ``ok`` and ``failed``
   are queries a sampler answered; ``reused`` is an answer taken from an identical earlier query
   (``reused_from``), for which no sampler ran. "Queries" means the first two (what the planner's
@@ -28,21 +31,19 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from planner.store import LIVE_STATUSES, RUN_STATUSES
+from planner.events import EVENT_TYPES, StreamQueried
+from planner.status import (
+    BENCH_STATUSES,
+    LIVE_STATUSES,
+    RUN_STATUSES,
+    STATUS_TEXT,
+    TRAIN_STATUSES,
+    all_status_names,
+)
 
 # --- run statuses ------------------------------------------------------------------------------
 
-STATUS_TEXT: dict[str, str] = {
-    "queued": "waiting for a worker",
-    "running": "planning now",
-    "solved": "found a plan within its budget",
-    "failed": "stopped on an error, or its plan did not validate",
-    "timeout": "no plan within its budget",
-    "cancelled": "cancelled by a user, or stopped by the server's shutdown",
-    "interrupted": "its process stopped before it finished",
-}
-if tuple(STATUS_TEXT) != RUN_STATUSES:
-    raise RuntimeError("planner.figures: a run status without its line, or out of order")
+# The names and their lines are planner.status's; the page reads them from here.
 
 # --- stream queries ----------------------------------------------------------------------------
 
@@ -85,7 +86,7 @@ def count_queries(events: Iterable[Mapping[str, Any]]) -> dict[str, QueryCount]:
     """Stream -> its :class:`QueryCount`, from a run's events (other types are skipped)."""
     out: dict[str, QueryCount] = {}
     for e in events:
-        if e.get("type") != "stream_queried":
+        if e.get("type") != StreamQueried.type:
             continue
         count = out.setdefault(str(e["stream"]), QueryCount())
         kind = query_kind(e)
@@ -185,11 +186,22 @@ def interval_note(seeds: int) -> str | None:
 # --- for the page ------------------------------------------------------------------------------
 
 
+def constant_names(names: Iterable[str]) -> dict[str, str]:
+    """``{"NODE_ADDED": "node_added", ...}``: how the page names each name (``EVENT.NODE_ADDED``,
+    ``STATUS.RUNNING``), so a name it uses that Python does not define is undefined there."""
+    return {name.upper(): name for name in names}
+
+
 def definitions() -> dict[str, Any]:
-    """Everything above as JSON data, for the page."""
+    """Everything above as JSON data, for the page, with the names of the event types
+    (:mod:`planner.events`) and of every status (:mod:`planner.status`)."""
     return {
+        "event": constant_names(EVENT_TYPES),
+        "status": constant_names(all_status_names()),
         "run_statuses": list(RUN_STATUSES),
         "live_statuses": list(LIVE_STATUSES),
+        "bench_statuses": list(BENCH_STATUSES),
+        "train_statuses": list(TRAIN_STATUSES),
         "status_text": STATUS_TEXT,
         "query_kinds": list(QUERY_KINDS),
         "query_kind_text": QUERY_KIND_TEXT,

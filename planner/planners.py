@@ -39,14 +39,7 @@ from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
 from planner.abstract.source import SKELETON_SOURCES, Feedback, SkeletonSource
 from planner.domains.spec import LoadedDomain
-from planner.events import (
-    Emitter,
-    ModelPrediction,
-    NodeAdded,
-    SkeletonsAdded,
-    SolutionFound,
-    StreamQueried,
-)
+from planner.events import Emitter, SkeletonsAdded
 from planner.pddl.structs import Atom, Problem
 from planner.plans import execution_seconds
 from planner.search.baseline import BaselineConfig
@@ -71,8 +64,10 @@ from planner.search.mcts import BaselinePolicy, Policy, TreeSearch, context_json
 from planner.search.order import order_streams, seconds_per_failure
 from planner.search.queries import remembered
 from planner.search.tree import Node
+from planner.status import SearchStatus
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
+from planner.trace import NodeEvents
 
 log = logging.getLogger(__name__)
 
@@ -161,7 +156,7 @@ class PlanningTask:
 class PlannerOutcome:
     """How a planner ended, and what it made."""
 
-    status: str  # solved, timeout, failed, cancelled
+    status: SearchStatus
     bound: BoundPlan | None
     execution_s: float | None  # trajectory seconds of the bound plan
     oracle_s: float | None  # top-k + successful queries on the solution branch
@@ -407,15 +402,11 @@ class LearnedPlanner(_TreeSearchPlanner):
     def policy(self, task: PlanningTask, emitter: Emitter) -> Policy:
         assert self.predictor is not None  # prepare() loaded it
 
+        events = NodeEvents(emitter, encode=task.loaded.encode)
+
         def report(node: Node, first: StreamCost, q: float) -> None:
-            emitter.emit(
-                ModelPrediction,
-                node_id=node.id,
-                p_s=first.p_s,
-                r_s=first.r_s,
-                r_f=first.r_f,
-                r_m=first.r_m,
-                q=q,
+            events.predicted(
+                node.id, p_s=first.p_s, r_s=first.r_s, r_f=first.r_f, r_m=first.r_m, q=q
             )
 
         return LearnedPolicy(
@@ -615,7 +606,7 @@ class SequentialPlanner(Planner):
                 task.samplers, bound.skeleton.actions, bound.skeleton.stream_plan, bound.values
             )
             oracle_s = recorder.solved(execution_s, skeleton_seconds(task))
-        status = "solved" if bound is not None else "timeout"
+        status: SearchStatus = "solved" if bound is not None else "timeout"
         return PlannerOutcome(
             status, bound, execution_s, oracle_s, queries, tried, ended_by=ended_by
         )
@@ -630,12 +621,11 @@ class _SequentialRecorder:
     def __init__(
         self, emitter: Emitter, task: PlanningTask, start: float, plans: Sequence[AbstractPlan]
     ) -> None:
-        self.emitter = emitter
         self.plans = plans  # the run's list: it grows as more skeletons come
         self.fluents = task.fluents
         self.static_context = task.static_context
         self.encode = task.loaded.encode
-        self.describe = task.loaded.codec.label
+        self.report = NodeEvents(emitter, encode=self.encode, describe=task.loaded.codec.label)
         self.start = start
         self.next_id = 1  # 0 is the root
         self.plan_index = -1
@@ -644,26 +634,15 @@ class _SequentialRecorder:
         self.parent = 0
         self.chain: list[tuple[int, float]] = []  # (node, wall seconds) of this restart's successes
 
-    def _add(self, parent: int, depth: int, stream: str | None, success: bool, **kw: Any) -> int:
+    def _new_id(self) -> int:
         node = self.next_id
         self.next_id += 1
-        self.emitter.emit(
-            NodeAdded,
-            node_id=node,
-            parent_id=parent,
-            plan_index=self.plan_index,
-            depth=depth,
-            stream=stream,
-            success=success,
-            **kw,
-        )
         return node
 
     def open_plan(self, index: int) -> None:
         self.plan_index, self.restart, self.chain = index, -1, []
-        plan = self.plans[index]
-        label = f"plan {index} ({len(plan.stream_plan)} streams)"
-        self.plan_node = self._add(0, 0, None, True, outputs=[], label=label)
+        self.plan_node = self._new_id()
+        self.report.plan_opened(self.plan_node, index, len(self.plans[index].stream_plan))
 
     def queried(
         self,
@@ -676,34 +655,16 @@ class _SequentialRecorder:
     ) -> None:
         if restart != self.restart:
             self.restart, self.parent, self.chain = restart, self.plan_node, []
-        node = self.next_id
-        encoded = [self.encode(v) for v in inputs]
-        self.emitter.emit(
-            StreamQueried,
+        node = self._new_id()
+        self.report.queried(
             node_id=node,
-            stream=inst.stream,
-            input_names=list(inst.inputs),
-            inputs=encoded,
-            input_labels=[self.describe(v) for v in encoded],
-            success=result.success,
-            wall_s=result.wall_s,
-            cpu_s=result.cpu_s,
-            execution_s=result.execution_s,
-            error=result.error,
+            parent_id=self.parent,
+            plan_index=self.plan_index,
+            depth=i + 1,
+            inst=inst,
+            inputs=inputs,
             context=context_json(context, self.fluents, self.static_context, self.encode),
-            reason=result.reason,
-        )
-        outputs = [self.encode(v) for v in result.outputs or ()]
-        label = f"{inst}" + ("" if result.success else " (failed)")
-        self._add(
-            self.parent,
-            i + 1,
-            inst.stream,
-            result.success,
-            outputs=outputs,
-            label=label,
-            output_names=list(inst.outputs) if result.success else [],
-            output_labels=[self.describe(v) for v in outputs],
+            result=result,
         )
         if result.success:
             self.parent = node
@@ -712,10 +673,9 @@ class _SequentialRecorder:
     def solved(self, execution_s: float, skeleton_s: float) -> float:
         """Reports the solution (the last success); returns its oracle seconds."""
         oracle = skeleton_s + sum(wall for _, wall in self.chain)
-        self.emitter.emit(
-            SolutionFound,
-            node_id=self.parent,
-            plan_index=self.plan_index,
+        self.report.solved(
+            self.parent,
+            self.plan_index,
             planning_s=time.perf_counter() - self.start,
             execution_s=execution_s,
             oracle_s=oracle,

@@ -20,6 +20,7 @@ from planner.domains import LoadedDomain
 from planner.events import EventSink, FanOutSink
 from planner.pddl.structs import Problem
 from planner.planners import DEFAULT_PLANNER, ORDERS, PLANNERS, plan_summaries
+from planner.status import SearchStatus
 
 if TYPE_CHECKING:
     from planner.store import RunStore
@@ -97,7 +98,7 @@ class RecordedRun:
     result: RunResult
     loaded: LoadedDomain
     problem: Problem
-    status: str  # the stored status: the search's, or failed when the plan does not validate
+    status: SearchStatus  # stored: the search's, or failed when the plan does not validate
     valid: bool | None  # None when there is no plan
     message: str
     plan: dict[str, Any] | None  # the bound plan file when solved

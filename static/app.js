@@ -9,10 +9,11 @@
 // still going then follows over the websocket from its last stored event. The step slider
 // moves the cursor and the canvas (treeview.js) redraws at the next animation frame.
 //
-// What the figures mean (query kinds, the Q scale, status names) is planner/figures.py's,
-// imported from /generated/definitions.js.
+// What the figures mean (query kinds, the Q scale) and every name the page compares with
+// (event types, statuses) are planner/figures.py's, imported from /generated/definitions.js:
+// EVENT.NODE_ADDED, STATUS.QUEUED, never a literal (tests/app/test_reads.py checks).
 
-import { LIVE_STATUSES, RUN_STATUSES, STATUS_TEXT } from "/generated/definitions.js";
+import { EVENT, LIVE_STATUSES, RUN_STATUSES, STATUS, STATUS_TEXT } from "/generated/definitions.js";
 import { ApiError, api, streamUrl } from "./api.js";
 import { BenchPage } from "./benchmarks.js";
 import { clearChart, drawQueries, drawTime } from "./charts.js";
@@ -772,7 +773,7 @@ function renderEmpty() {
     } else if (work !== null) {
       text = work;
     } else if (app.replay.last < 0) {
-      if (run.detail?.status === "queued") text = "Queued: waiting for a worker.";
+      if (run.detail?.status === STATUS.QUEUED) text = "Queued: waiting for a worker.";
       else text = isLive() || !run.done ? "Waiting for the run's first events…" : "This run has no events.";
     } else if (tree.end !== null && app.replay.step === app.replay.last) {
       text = "This run ended without a search tree.";
@@ -823,22 +824,22 @@ function renderLegend() {
 function describe(ev) {
   const t = `t=${num(ev.t, 2)} s · #${ev.seq} `;
   switch (ev.type) {
-    case "run_started":
+    case EVENT.RUN_STARTED:
       return `${t}run started: ${ev.scene}, ${ev.planner}, seed ${ev.seed}`;
-    case "skeleton_progress":
+    case EVENT.SKELETON_PROGRESS:
       return `${t}skeleton source, ${ev.phase}: ${ev.message} (${seconds(ev.seconds)})`;
-    case "abstract_plans_found":
+    case EVENT.ABSTRACT_PLANS_FOUND:
       return `${t}${ev.plans.length} abstract plans in ${seconds(ev.seconds)}`;
-    case "skeletons_added": {
+    case EVENT.SKELETONS_ADDED: {
       const idx = ev.plans.map((p) => p.index);
       const which = idx.length === 1 ? ` (plan ${idx[0]})` : idx.length ? ` (plans ${Math.min(...idx)} to ${Math.max(...idx)})` : "";
       const learned = ev.learned?.length ? `; learned ${ev.learned.length}: ${ev.learned.slice(0, 3).join(", ")}${ev.learned.length > 3 ? ", …" : ""}` : "";
       const n = ev.plans.length;
       return `${t}${n} more skeleton${n === 1 ? "" : "s"}${which} in ${seconds(ev.seconds)}, asked for ${ev.reason}${learned}`;
     }
-    case "node_added":
+    case EVENT.NODE_ADDED:
       return `${t}node ${ev.node_id} added: ${ev.label}`;
-    case "stream_queried":
+    case EVENT.STREAM_QUERIED:
       return (
         `${t}query ${ev.stream}(${ev.input_names.join(" ")}) ${ev.success ? "ok" : "FAILED"} ` +
         (ev.reused_from !== null && ev.reused_from !== undefined
@@ -846,20 +847,20 @@ function describe(ev) {
           : `in ${seconds(ev.wall_s)}`) +
         ` → node ${ev.node_id}${ev.error ? `: ${ev.error}` : ev.reason ? `: ${ev.reason}` : ""}`
       );
-    case "model_prediction":
+    case EVENT.MODEL_PREDICTION:
       return `${t}prediction for node ${ev.node_id}: Q ${num(ev.q)} s, P_S ${num(ev.p_s)}`;
-    case "node_visited":
+    case EVENT.NODE_VISITED:
       return `${t}back-up node ${ev.node_id}: ${ev.visits} visits, value ${num(ev.value)}`;
-    case "solution_found":
+    case EVENT.SOLUTION_FOUND:
       return (
         `${t}solution at node ${ev.node_id} (plan ${ev.plan_index}): ` +
         `planning ${seconds(ev.planning_s)}, execution ${seconds(ev.execution_s)}`
       );
-    case "run_finished":
+    case EVENT.RUN_FINISHED:
       return `${t}run finished: ${ev.status} (${ev.message})`;
-    case "run_failed":
+    case EVENT.RUN_FAILED:
       return `${t}run failed: ${ev.error}`;
-    case "run_cancelled":
+    case EVENT.RUN_CANCELLED:
       return `${t}run cancelled: ${ev.reason}`;
     default:
       return `${t}${ev.type}`;

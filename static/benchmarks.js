@@ -4,6 +4,7 @@
 // and the paired improvement with its interval. The figures are planner.report.summarize's,
 // the code of `tamp report` (GET /api/benchmarks/{id}). Below, the horizon curves (horizon.js).
 
+import { STATUS } from "/generated/definitions.js";
 import { ApiError, api } from "./api.js";
 import { escapeHtml, seconds, when } from "./format.js";
 import { HorizonPanel } from "./horizon.js";
@@ -181,7 +182,7 @@ export class BenchPage {
     }
     if (!this.visible) return;
     this._followProgress();
-    const running = this.benches.some((b) => b.status === "running");
+    const running = this.benches.some((b) => b.status === STATUS.RUNNING);
     this.listTimer = setTimeout(() => this.refreshList(), running ? POLL_RUNNING_MS : POLL_IDLE_MS);
   }
 
@@ -241,7 +242,7 @@ export class BenchPage {
     this._renderDetail(info);
     this.ms = performance.now() - t0;
     document.body.dataset.bench = `${info.id}:${info.done}`;
-    if (info.status === "running") {
+    if (info.status === STATUS.RUNNING) {
       // A large benchmark's summary costs the server seconds (the bootstrap of tamp report)
       // each time a trial finished: ask for it at most a tenth of the time; the progress
       // bar follows the cheap list meanwhile (refreshList).
@@ -253,8 +254,8 @@ export class BenchPage {
   _renderDetail(info) {
     // The head (its buttons) is redrawn only when the state changes, so that a click on Cancel
     // is not lost to a redraw; the progress in it is updated in place.
-    const live = info.status === "running";
-    const resumable = (info.status === "cancelled" || info.status === "interrupted") && info.done < info.total;
+    const live = info.status === STATUS.RUNNING;
+    const resumable = (info.status === STATUS.CANCELLED || info.status === STATUS.INTERRUPTED) && info.done < info.total;
     const headKey = JSON.stringify([info.id, info.status, info.runner, resumable, info.message]);
     const bodyKey = JSON.stringify([info.id, info.status, info.done]);
     if (`${headKey}${bodyKey}` === this.shownKey) return;
@@ -417,7 +418,7 @@ export class BenchPage {
       const a = row[x];
       const b = row[y];
       if (!a?.status || !b?.status || a[measure] === undefined || b[measure] === undefined) continue;
-      out.push({ seed: row.seed, x: a[measure], y: b[measure], a: a.run_id, b: b.run_id, solved: a.status === "solved" && b.status === "solved" });
+      out.push({ seed: row.seed, x: a[measure], y: b[measure], a: a.run_id, b: b.run_id, solved: a.status === STATUS.SOLVED && b.status === STATUS.SOLVED });
     }
     return out;
   }

@@ -4,7 +4,7 @@
 // and total seconds against the objects in the goal), one line per planner with its 95%
 // interval as error bars; a click on a point opens its benchmark.
 
-import { MIN_INTERVAL_SEEDS } from "/generated/definitions.js";
+import { MIN_INTERVAL_SEEDS, STATUS } from "/generated/definitions.js";
 import { api } from "./api.js";
 import { escapeHtml } from "./format.js";
 
@@ -119,7 +119,7 @@ export class HorizonPanel {
     if (drawnKey === this.drawnKey) return;
     this.drawnKey = drawnKey;
     const scenes = series.benchmarks
-      .map((b) => `${escapeHtml(b.scene)} (${b.objects})${b.status === "done" ? "" : ` ${escapeHtml(b.status)}: ${b.done}/${b.total} trials`}`)
+      .map((b) => `${escapeHtml(b.scene)} (${b.objects})${b.status === STATUS.DONE ? "" : ` ${escapeHtml(b.status)}: ${b.done}/${b.total} trials`}`)
       .join(" · ");
     this.body.querySelector("[data-testid=horizon-scenes]").innerHTML =
       `${scenes}. Means over the seeds every planner finished (unsolved at the budget), 95% intervals; a click opens the benchmark.` +

@@ -4,7 +4,7 @@
 // from stored runs (a background job: POST /api/training, the code of `tamp train`), and a
 // button that launches a learned run with a model.
 
-import { LIVE_STATUSES, RUN_STATUSES } from "/generated/definitions.js";
+import { LIVE_STATUSES, RUN_STATUSES, STATUS } from "/generated/definitions.js";
 import { ApiError, api } from "./api.js";
 import { escapeHtml, num, seconds, when } from "./format.js";
 
@@ -188,7 +188,7 @@ export class ModelsPage {
   async _resumeJob() {
     try {
       const jobs = await api("/api/training");
-      const running = jobs.find((j) => j.status === "running");
+      const running = jobs.find((j) => j.status === STATUS.RUNNING);
       if (running) this._showJob(running);
     } catch {
       // no training route: no job to show
@@ -202,14 +202,14 @@ export class ModelsPage {
     box.dataset.status = job.status;
     const stream = job.stream ? ` · fitting <code>${escapeHtml(job.stream)}</code>` : "";
     const done =
-      job.status === "done"
+      job.status === STATUS.DONE
         ? ` <a href="#model=${encodeURIComponent(job.name)}" data-testid="train-open">open ${escapeHtml(job.name)}</a>`
         : "";
     box.innerHTML = `<div><b>${escapeHtml(job.name)}</b> · ${escapeHtml(job.domain)} · ${job.runs.length} runs, ${job.queries} queries
-        <span class="badge ${job.status === "done" ? "solved" : job.status === "failed" ? "failed" : "running"}" data-testid="train-status">${escapeHtml(job.status)}</span></div>
+        <span class="badge ${job.status === STATUS.DONE ? "solved" : job.status === STATUS.FAILED ? "failed" : "running"}" data-testid="train-status">${escapeHtml(job.status)}</span></div>
       <progress data-testid="train-progress" max="1" value="${job.progress}"></progress> ${pct(job.progress)}${stream}${done}
       ${job.message ? `<p class="muted">${escapeHtml(job.message)}</p>` : ""}`;
-    if (job.status === "running") {
+    if (job.status === STATUS.RUNNING) {
       this.jobTimer = setTimeout(async () => {
         try {
           this._showJob(await api(`/api/training/${encodeURIComponent(job.id)}`));
@@ -217,7 +217,7 @@ export class ModelsPage {
           this._error(err.message);
         }
       }, POLL_JOB_MS);
-    } else if (job.status === "done") {
+    } else if (job.status === STATUS.DONE) {
       this.reloadModels().then(() => {
         if (this.visible) location.hash = `#model=${encodeURIComponent(job.name)}`;
       });

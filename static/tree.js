@@ -1,11 +1,14 @@
-// The search tree of one run, folded from its events (planner/events.py) one at a time.
+// The search tree of one run, folded from its events (planner/events.py) one at a time: the
+// page's fold of a live run, by the rules of planner/trace.py's (which compare and the 3D view
+// use, and which serves the compare view's trees, treeFromColumns below). Event types are named
+// by EVENT (generated from planner/events.py), never by literals.
 //
 // Every applied event returns an undo function, so the page steps back as cheaply as it steps
 // forward: the state after events 0..k is reached from the current one by applying or undoing
 // the events in between, never by replaying the run from the start.
 //
 // Tree conventions (planner/events.py): the root is node 0 (parent_id null), never announced
-// by the tree search itself, so it exists here from the start; its children are the stream
+// by the searches themselves, so it exists here from the start; its children are the stream
 // plans (depth 0); a node at depth d >= 1 is one result of querying the d-th stream of its
 // plan. A stream_queried event names the CHILD node it produced and comes right before that
 // child's node_added. Skeletons come in batches: abstract_plans_found's, then skeletons_added's
@@ -15,7 +18,7 @@
 // Query counts are planner/figures.py's: ok and failed ran a sampler; reused answers (an
 // identical earlier query's, reused_from) are counted apart.
 
-import { Q_INHERITED } from "/generated/definitions.js";
+import { EVENT, Q_INHERITED } from "/generated/definitions.js";
 
 const noop = () => {};
 export const FOLD_MIN = 4; // a node's failed leaves are folded into one fan from this many
@@ -75,11 +78,11 @@ export class SearchTree {
 
   _apply(ev) {
     switch (ev.type) {
-      case "node_added":
+      case EVENT.NODE_ADDED:
         return this._nodeAdded(ev);
-      case "stream_queried":
+      case EVENT.STREAM_QUERIED:
         return this._streamQueried(ev);
-      case "model_prediction":
+      case EVENT.MODEL_PREDICTION:
         return this._setField(ev.node_id, "pred", ev, (had) => {
           if (!had) this.predicted += 1;
           this.predVersion += 1;
@@ -88,21 +91,21 @@ export class SearchTree {
             this.predVersion += 1;
           };
         });
-      case "node_visited":
+      case EVENT.NODE_VISITED:
         return this._setField(ev.node_id, "visit", ev);
-      case "run_started":
+      case EVENT.RUN_STARTED:
         return this._swap("run", ev);
-      case "skeleton_progress":
+      case EVENT.SKELETON_PROGRESS:
         return this._swap("progress", ev);
-      case "abstract_plans_found":
+      case EVENT.ABSTRACT_PLANS_FOUND:
         return this._skeletons(ev, true);
-      case "skeletons_added":
+      case EVENT.SKELETONS_ADDED:
         return this._skeletons(ev, false);
-      case "solution_found":
+      case EVENT.SOLUTION_FOUND:
         return this._swap("solution", ev);
-      case "run_finished":
-      case "run_failed":
-      case "run_cancelled":
+      case EVENT.RUN_FINISHED:
+      case EVENT.RUN_FAILED:
+      case EVENT.RUN_CANCELLED:
         return this._swap("end", ev);
       default:
         return noop; // a type this page does not know: nothing to show

@@ -198,6 +198,28 @@ def test_events_stored_before_a_field_with_a_default_was_added_still_load() -> N
     assert event.reused_from is None and event.context == {} and event.reason is None
 
 
+@pytest.mark.parametrize("name", sorted(EVENT_TYPES))
+def test_a_stored_event_is_read_back_without_checking_it_again(name: str) -> None:
+    """What the store reads for a whole tree (event_from_stored) equals the checked read."""
+    event = EXAMPLES[name]
+    data = json.loads(event_to_json(event))
+    assert events.event_from_stored(data) == event_from_dict(data) == event
+
+
+def test_a_stored_event_missing_a_newer_field_takes_its_default() -> None:
+    data = json.loads(event_to_json(EXAMPLES["stream_queried"]))
+    del data["reused_from"], data["context"], data["input_labels"]
+    a, b = events.event_from_stored(data), events.event_from_stored(dict(data))
+    assert isinstance(a, StreamQueried) and isinstance(b, StreamQueried)
+    assert a.reused_from is None and a.context == {} and a.input_labels == []
+    assert a.context is not b.context  # a fresh default each
+    del data["stream"]
+    with pytest.raises(ValueError, match="missing field 'stream'"):
+        events.event_from_stored(data)
+    with pytest.raises(ValueError, match="unknown event type 'node_deleted'"):
+        events.event_from_stored({"type": "node_deleted"})
+
+
 def test_only_a_failure_has_a_reason() -> None:
     data = event_to_dict(EXAMPLES["stream_queried"]) | {"success": True, "error": None}
     with pytest.raises(ValueError, match="reason: a successful query has no failure reason"):

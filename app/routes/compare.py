@@ -6,7 +6,7 @@ from typing import Annotated
 
 from fastapi import APIRouter, Query
 
-from app.compare import compare_runs
+from app.compare import columns, compare_runs
 from app.deps import COMMON_RESPONSES, ERROR, Dash, RunId, not_found
 from app.schemas import CompareOut, Run, TreeOut
 
@@ -17,24 +17,26 @@ RunQuery = Annotated[str, Query(min_length=1, max_length=64, description="a run 
 
 @router.get("/runs/{run_id}/tree", responses={404: ERROR})
 def tree(run_id: RunId, dash: Dash) -> TreeOut:
-    """The run's search tree as the compare view draws it."""
+    """The run's search tree (planner/trace.py's fold of its events) as the compare view
+    draws it."""
     try:
         t = dash.trees.get(run_id)
     except KeyError as exc:
         raise not_found(f"unknown run {run_id!r}") from exc
+    c = columns(t)
     return TreeOut(
-        run_id=t.run_id,
-        ids=t.ids,
-        parents=t.parents,
-        plans=t.plans,
-        depths=t.depths,
-        streams=t.streams,
-        stream_names=t.stream_names,
-        success=t.success,
-        q=t.q,
-        labels=t.labels,
-        solution=t.solution,
-        plan_list=t.plan_list,
+        run_id=c.run_id,
+        ids=c.ids,
+        parents=c.parents,
+        plans=c.plans,
+        depths=c.depths,
+        streams=c.streams,
+        stream_names=c.stream_names,
+        success=c.success,
+        q=c.q,
+        labels=c.labels,
+        solution=c.solution,
+        plan_list=c.plan_list,
     )
 
 

@@ -16,12 +16,12 @@ import logging
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol
+from typing import Any, Protocol
 
 from planner.abstract.instantiate import StreamInstance
 from planner.abstract.skeleton import AbstractPlan
 from planner.abstract.source import Feedback
-from planner.events import Emitter, NodeAdded, NodeVisited, SolutionFound, StreamQueried
+from planner.events import Emitter
 from planner.pddl.structs import Atom
 from planner.search.baseline import (
     BaselineConfig,
@@ -35,12 +35,12 @@ from planner.search.feedback import InstanceKey, InstanceRecords
 from planner.search.queries import query_context, query_identity, remembered
 from planner.search.reuse import reusable_streams
 from planner.search.tree import ROOT, Node, Tree
+from planner.status import SearchStatus
 from planner.streams.adapters import StreamContext
 from planner.streams.runtime import QueryResult, StreamRuntime
+from planner.trace import NodeEvents
 
 log = logging.getLogger(__name__)
-
-Status = Literal["solved", "timeout", "failed", "cancelled"]
 
 
 class Policy(Protocol):
@@ -178,7 +178,7 @@ class BaselinePolicy:
 
 @dataclass
 class SearchResult:
-    status: Status
+    status: SearchStatus
     node_id: int | None  # the fully bound node, when solved
     plan_index: int | None
     values: dict[str, Any]  # optimistic object -> value along the solution branch
@@ -269,9 +269,11 @@ class TreeSearch:
         self.initial_values = dict(initial_values)
         self.runtime = runtime
         self.policy = policy
-        self.emitter = emitter
         self.encode = remembered(encode)  # JSON of a value, once per value object
         self.describe = describe  # a label of an encoded value, for people (events' labels)
+        self.report = (  # the tree's events
+            None if emitter is None else NodeEvents(emitter, encode=self.encode, describe=describe)
+        )
         self.progress = progress
         self.should_stop = should_stop
         self.fluents = fluents  # predicates recorded as the context of each query
@@ -329,39 +331,6 @@ class TreeSearch:
         self.answered = 0
         self.iterations = 0
 
-    # --- events ------------------------------------------------------------------------------
-
-    def _label(self, node: Node) -> str:
-        if node.parent == ROOT:
-            plan = self.skeletons[node.plan_index]
-            return f"plan {node.plan_index} ({len(plan.stream_plan)} streams)"
-        inst = self.skeletons[node.plan_index].stream_plan[node.depth - 1]
-        return f"{inst}" + ("" if node.success else " (failed)")
-
-    def _added(self, node: Node) -> None:
-        if self.emitter is None:
-            return
-        stream = None
-        if node.parent != ROOT and node.parent is not None:
-            stream = self.skeletons[node.plan_index].stream_plan[node.depth - 1].stream
-        outputs = [self.encode(v) for v in node.outputs.values()]
-        self.emitter.emit(
-            NodeAdded,
-            node_id=node.id,
-            parent_id=node.parent,
-            plan_index=node.plan_index,
-            depth=node.depth,
-            stream=stream,
-            success=node.success,
-            outputs=outputs,
-            label=self._label(node),
-            output_names=list(node.outputs),
-            output_labels=self._labels(outputs),
-        )
-
-    def _labels(self, encoded: list[Any]) -> list[str]:
-        return [] if self.describe is None else [self.describe(v) for v in encoded]
-
     # --- steps: a search is these two, in the order its policy picks (:meth:`run`); a caller
     # may also take them by hand, as the tests do ----------------------------------------------
 
@@ -369,7 +338,8 @@ class TreeSearch:
         """Open skeleton ``index``: a new child of the root, with nothing bound yet."""
         node = self.tree.add(ROOT, plan_index=index, depth=0, success=True)
         self._plans_open += 1
-        self._added(node)
+        if self.report is not None:
+            self.report.plan_opened(node.id, index, len(self.skeletons[index].stream_plan))
         return node
 
     def _leaves(self, plan_index: int) -> list[bool]:
@@ -472,25 +442,18 @@ class TreeSearch:
             )
         if result.success:
             self.deepest = max(self.deepest, child.depth / len(plan.stream_plan))
-        if self.emitter is not None:
-            encoded = [self.encode(v) for v in inputs]
-            self.emitter.emit(
-                StreamQueried,
+        if self.report is not None:
+            self.report.queried(
                 node_id=child.id,
-                stream=inst.stream,
-                input_names=list(inst.inputs),
-                inputs=encoded,
-                input_labels=self._labels(encoded),
-                success=result.success,
-                wall_s=result.wall_s,
-                cpu_s=result.cpu_s,
-                execution_s=result.execution_s,
-                error=result.error,
+                parent_id=node.id,
+                plan_index=child.plan_index,
+                depth=child.depth,
+                inst=inst,
+                inputs=inputs,
                 context=self._context_json(context),
+                result=result,
                 reused_from=reused_from,
-                reason=result.reason,
             )
-        self._added(child)
         return child
 
     def _test_key(
@@ -576,10 +539,8 @@ class TreeSearch:
             if node.id != leaf.id:
                 visited = [self.tree[c].value for c in node.children if self.tree[c].visits]
                 node.value = max(visited) if visited else 0.0
-            if self.emitter is not None:
-                self.emitter.emit(
-                    NodeVisited, node_id=node.id, visits=node.visits, value=node.value
-                )
+            if self.report is not None:
+                self.report.visited(node.id, node.visits, node.value)
             current = node.parent
 
     def _say(self, start: float) -> None:
@@ -620,7 +581,7 @@ class TreeSearch:
         while self._plans_open < first:
             self.open_plan(self._plans_open)
         iterations = 0
-        status: Status = "timeout"
+        status: SearchStatus = "timeout"
         ended_by: str | None = None
         solution: Node | None = None
         while True:
@@ -697,11 +658,10 @@ class TreeSearch:
         oracle = sum(self.tree[i].query_wall_s for i in branch)
         execution = sum(r.execution_s for node_id, r in self.queries if node_id in branch)
         values = self.tree.bindings(solution.id)
-        if self.emitter is not None:
-            self.emitter.emit(
-                SolutionFound,
-                node_id=solution.id,
-                plan_index=solution.plan_index,
+        if self.report is not None:
+            self.report.solved(
+                solution.id,
+                solution.plan_index,
                 planning_s=seconds,
                 execution_s=execution,
                 oracle_s=oracle,

@@ -1,12 +1,9 @@
 """The record of runs: every event and every stream query, in SQLite or PostgreSQL through
 SQLAlchemy, its schema migrated by Alembic when a store opens (``schema``)."""
 
+from planner.status import BENCH_STATUSES, FINAL_STATUSES, LIVE_STATUSES, RUN_STATUSES
 from planner.store.db import (
-    BENCH_STATUSES,
-    FINAL_STATUSES,
-    LIVE_STATUSES,
     MAX_INT,
-    RUN_STATUSES,
     BenchRecord,
     BenchTrialRecord,
     OutcomeSums,

@@ -14,6 +14,7 @@ import os
 import re
 import sqlite3
 import threading
+import typing
 import uuid
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
@@ -58,19 +59,22 @@ from planner.events import (
     RunFinished,
     StreamQueried,
     event_from_dict,
+    event_from_stored,
     event_payload,
+)
+from planner.status import (
+    BENCH_STATUSES,
+    FINAL_STATUSES,
+    LIVE_STATUSES,
+    RUN_STATUSES,
+    BenchStatus,
+    RunStatus,
 )
 from planner.store import schema
 from planner.store.owner import is_alive, process_token
 
 log = logging.getLogger(__name__)
 
-RUN_STATUSES = ("queued", "running", "solved", "failed", "timeout", "cancelled", "interrupted")
-FINAL_STATUSES = RUN_STATUSES[2:]  # what finish_run accepts
-LIVE_STATUSES = RUN_STATUSES[:2]  # not finished yet
-# A benchmark runs, is done, stopped before its end (resumable), or was cancelled by its user
-# (resumable too).
-BENCH_STATUSES = ("running", "done", "interrupted", "cancelled")
 MAX_INT = 2**63 - 1  # SQLite's largest integer: bigger numbers never reach a query
 INTERRUPTED = "the process running it stopped before it finished"
 _RUN_ID = re.compile(r"[0-9a-f]{32}")  # uuid4().hex
@@ -200,7 +204,7 @@ class RunRecord:
     seed: int
     planner: str
     config: dict[str, Any]
-    status: str  # one of RUN_STATUSES
+    status: RunStatus
     created_at: datetime  # UTC
     finished_at: datetime | None
     planning_s: float | None
@@ -218,7 +222,7 @@ class RunRecord:
             seed=row.seed,
             planner=row.planner,
             config=json.loads(row.config),
-            status=row.status,
+            status=typing.cast(RunStatus, row.status),
             created_at=_utc(row.created_at),
             finished_at=_utc(row.finished_at) if row.finished_at is not None else None,
             planning_s=row.planning_s,
@@ -299,7 +303,7 @@ class BenchRecord:
     id: str
     created_at: datetime
     finished_at: datetime | None
-    status: str
+    status: BenchStatus
     config: dict[str, Any]
     owner: str | None = None  # the process running it (host:pid:start), while it runs
 
@@ -309,7 +313,7 @@ class BenchRecord:
             row.id,
             _utc(row.created_at),
             _utc(row.finished_at) if row.finished_at is not None else None,
-            row.status,
+            typing.cast(BenchStatus, row.status),
             json.loads(row.config),
             row.owner,
         )
@@ -698,22 +702,22 @@ class RunStore:
             out.append((seq, f'{{"type":"{type_}"{head}{seq},"t":{float(t)!r}{rest}'))
         return out
 
-    def events_of(self, run_id: str, types: Collection[str]) -> list[dict[str, Any]]:
-        """The run's events of some types, in order, as the dicts :func:`event_to_dict` makes,
-        read without building the event objects (fast for a whole tree: what the dashboard
-        draws and compares)."""
+    def events_of(self, run_id: str, types: Collection[str]) -> list[Event]:
+        """The run's events of some types, in order, built without checking their fields again
+        (:func:`~planner.events.event_from_stored`: fast for a whole tree, what compare
+        folds)."""
         query = (
             select(EventRow.seq, EventRow.t, EventRow.type, EventRow.payload)
             .where(EventRow.run_id == run_id, EventRow.type.in_(list(types)))
             .order_by(EventRow.seq)
         )
-        out: list[dict[str, Any]] = []
+        out: list[Event] = []
         with self.engine.connect() as conn:
             self._require(conn, run_id)
             for seq, t, type_, payload in conn.execute(query):
                 data = json.loads(payload)
-                data.update(type=type_, run_id=run_id, seq=seq, t=t)
-                out.append(data)
+                data.update(type=type_, run_id=run_id, seq=seq, t=float(t))
+                out.append(event_from_stored(data))
         return out
 
     def query_times(self, run_id: str) -> list[float]:

@@ -482,15 +482,16 @@ def _record_reuse_run(db: Path) -> str:
     run_id = store.create_run("visit", 0, "baseline", {})
     sink = StoreSink(store, run_id)
     search, _ = make(sink, run_id)
-    assert search.emitter is not None
-    search.emitter.emit(RunStarted, scene="visit", seed=0, planner="baseline", config={})
-    search.emitter.emit(AbstractPlansFound, plans=plan_summaries(search.skeletons), seconds=0.01)
+    assert search.report is not None
+    emitter = search.report.emitter  # the run's, which the search's node events go through
+    emitter.emit(RunStarted, scene="visit", seed=0, planner="baseline", config={})
+    emitter.emit(AbstractPlansFound, plans=plan_summaries(search.skeletons), seconds=0.01)
     top = search.open_plan(0)
     first, second = search.query(top), search.query(top)
     search.query(first)
     search.query(second)  # the same motion from the other IK child: reused
     queries = sum(1 for _, r in search.queries if not r.reused)  # as the planners count them
-    search.emitter.emit(
+    emitter.emit(
         RunFinished,
         status="timeout",
         planning_s=0.1,

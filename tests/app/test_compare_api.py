@@ -180,8 +180,8 @@ def test_skeletons_added_during_the_search_are_in_the_tree(tmp_path: Path) -> No
             ],
         )
         tree = read_tree(store, run_id)
-    assert [p["index"] for p in tree.plan_list] == [0, 1, 2]
-    assert tree.ids == [0, 1] and tree.plans == [-1, 2]
+    assert [p["index"] for p in tree.trace.plans] == [0, 1, 2]
+    assert tree.trace.order == [0, 1] and tree.trace[1].plan_index == 2
     intern: dict[tuple[object, ...], int] = {}
     (key,) = choice_keys(tree, intern)
     assert any(k[-1] == ("plan", ("(a2)",)) for k in intern if intern[k] == key)

@@ -195,7 +195,7 @@ def test_nodes_are_coloured_by_predicted_cost(kitchen_run: tuple[Events, dict[st
     fold = SearchFold(loaded, problem, loaded.spec.view)
     for e in events:
         fold.fold(e)
-    nodes = sorted(n for n in fold.nodes if fold.nodes[n].parent_id is not None)
+    nodes = sorted(n for n in fold.trace.order if fold.trace[n].parent is not None)
     assert (fold.colors(nodes) == NO_PREDICTION).all()  # the baseline predicts nothing
     cheap, dear = nodes[1], nodes[-1]
     for node_id, q in ((cheap, 5.0), (dear, 80.0)):
@@ -209,7 +209,7 @@ def test_nodes_are_coloured_by_predicted_cost(kitchen_run: tuple[Events, dict[st
     (r_cheap, g_cheap, _), (r_dear, g_dear, _) = fold.colors([cheap, dear]).tolist()
     assert g_cheap > r_cheap  # green
     assert r_dear > g_dear  # red
-    child = fold.nodes[cheap].children[0]
+    child = fold.trace[cheap].children[0]
     assert fold.colors([child]).tolist() == fold.colors([cheap]).tolist()  # inherits
 
 
@@ -225,6 +225,7 @@ def test_other_domains_unknown_scenes_and_garbage_do_not_raise(
     viewer.show("no-such-scene", 0, events, plan)
     assert viewer.counts["nodes"] == 0
 
+    at = {"run_id": events[0]["run_id"], "seq": 10**6, "t": 1.0}
     garbage: list[Any] = [
         None,
         42,
@@ -234,20 +235,23 @@ def test_other_domains_unknown_scenes_and_garbage_do_not_raise(
         {"type": "node_added", "node_id": 500, "parent_id": 500, "success": True},
         {"type": "model_prediction", "node_id": 1, "q": "nan"},
         {"type": "stream_queried", "node_id": 501, "inputs": [{"type": "pose"}]},
-        {
-            "type": "node_added",
-            "node_id": 501,
-            "parent_id": 1,
-            "success": False,
-            "stream": "inverse-kinematics",
-        },
+        # well-formed events that do not fit: a parent never seen, its own parent, outputs
+        # the domain cannot decode, a solution in no tree
+        {"type": "node_added", "node_id": 501, "parent_id": 400, "success": False,
+         "stream": "inverse-kinematics", "plan_index": 0, "depth": 1, "outputs": [],
+         "label": "", **at},
+        {"type": "node_added", "node_id": 503, "parent_id": 503, "success": True,
+         "stream": "plan-motion", "plan_index": 0, "depth": 1, "outputs": [], "label": "",
+         **at},
         {"type": "node_added", "node_id": 502, "parent_id": 1, "success": True,
-         "stream": "plan-motion", "outputs": [{"type": "trajectory", "segments": 3}]},
-        {"type": "solution_found", "node_id": 1},
+         "stream": "plan-motion", "outputs": [{"type": "trajectory", "segments": 3}],
+         "plan_index": 0, "depth": 1, "label": "", **at},
+        {"type": "solution_found", "node_id": 600, "plan_index": 0, "planning_s": 1.0,
+         "execution_s": 1.0, "oracle_s": 1.0, **at},
     ]  # fmt: skip
     viewer.show("kitchen-1", 0, events[:10] + garbage, {"actions": 5})
     counts = viewer.counts
-    assert counts["skipped"] == 8
+    assert counts["skipped"] == len(garbage)
     assert viewer.plan_seconds is None  # a malformed plan is not animated
     viewer.extend(garbage)
     viewer.show("kitchen-1", 0, events, {"format": "nonsense", "actions": ["(fly away)"]})
