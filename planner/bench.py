@@ -22,7 +22,6 @@ from planner.api import MAX_BUDGET_S
 from planner.domains import LoadedDomain, problem_for_scene
 from planner.experiment import (
     BENCH_KEY,
-    CRASHED,
     StoreUnreachableError,
     Trial,
     TrialResult,
@@ -32,6 +31,7 @@ from planner.experiment import (
 from planner.planners import PRIORS, get_planner
 from planner.runs import ORDERS, PLANNERS, RunConfig
 from planner.search.bounds import check_bound
+from planner.status import CRASHED
 from planner.store import BenchTrialRecord, RunStore
 
 log = logging.getLogger(__name__)

@@ -24,6 +24,8 @@ from multiprocessing.process import BaseProcess
 from pathlib import Path
 from typing import Any
 
+from planner.status import CRASHED
+
 log = logging.getLogger(__name__)
 
 
@@ -53,7 +55,7 @@ class Trial:
 class TrialResult:
     trial: Trial
     run_id: str | None
-    status: str  # solved, timeout, failed; crashed: its process or node died (CRASHED)
+    status: str  # a TrialStatus (planner.status): solved, timeout, failed, or CRASHED
     valid: bool | None
     planning_s: float | None
     execution_s: float | None
@@ -70,7 +72,6 @@ class TrialResult:
 
 
 BENCH_KEY = "bench_id"  # the key of a trial's benchmark in its run's stored configuration
-CRASHED = "crashed"  # a trial whose process or Ray node died: not an outcome, run it again
 LOCAL_RAY = "local"  # --ray-address for a Ray started in this process, on this machine
 
 

@@ -49,6 +49,12 @@ STATUS_TEXT: dict[RunStatus, str] = {
 BenchStatus: TypeAlias = Literal["running", "done", "interrupted", "cancelled"]
 BENCH_STATUSES: tuple[BenchStatus, ...] = get_args(BenchStatus)
 
+# How a benchmark trial ended: its run's final status, or crashed (its process or Ray node
+# died: not an outcome of the planner, run again on resume).
+TrialStatus: TypeAlias = Literal["solved", "timeout", "failed", "crashed"]
+TRIAL_STATUSES: tuple[TrialStatus, ...] = get_args(TrialStatus)
+CRASHED: TrialStatus = "crashed"
+
 TrainStatus: TypeAlias = Literal["running", "done", "failed"]  # a training job of the dashboard
 TRAIN_STATUSES: tuple[TrainStatus, ...] = get_args(TrainStatus)
 
@@ -68,6 +74,6 @@ _check()
 def all_status_names() -> tuple[str, ...]:
     """Every status name of any set, once each, in the order first listed."""
     names: dict[str, None] = {}
-    for group in (RUN_STATUSES, BENCH_STATUSES, TRAIN_STATUSES):
+    for group in (RUN_STATUSES, BENCH_STATUSES, TRIAL_STATUSES, TRAIN_STATUSES):
         names.update(dict.fromkeys(group))
     return tuple(names)
