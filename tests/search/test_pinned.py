@@ -16,7 +16,9 @@ again when the learned planner came to choose stream plans by their estimate
 (``plans_by_estimate``); the Panda's learned trial again when skeletons came on demand from the
 adaptive source and the learned search came to trust only validated streams (issues 52, 53),
 and both Panda trials again when known failures stopped being asked twice (the Panda's IK
-says when the hand is blocked both ways round: ``TreeSearch.memo_exhausted``).
+says when the hand is blocked both ways round: ``TreeSearch.memo_exhausted``); both kitchen
+trials again when every placement try went on the packing grid (the kitchen's
+``SamplerConfig.corner_fraction`` 1.0, issue 52).
 
 To record a trial afresh after a change that is meant to change it:
 ``python -m tests.search.test_pinned SCENE SEED PLANNER``.
