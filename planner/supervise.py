@@ -160,14 +160,43 @@ def kill_group(proc: subprocess.Popen[str]) -> None:
 
 
 def kill_groups() -> int:
-    """Kill every process group this process has running (:func:`run_group`); how many."""
-    with _groups_lock:
-        groups = list(_groups)
-        _groups.clear()
+    """Kill every process group this process has running (:func:`run_group`); how many.
+
+    Besides the tracked ones, any child of this process that leads a session of its own: a
+    signal handled between ``Popen`` returning and its group being tracked finds it so. (Never
+    takes the lock a signal may have interrupted: the handler runs on the thread that holds it.)
+    """
+    try:
+        tracked = set(_groups)
+    except RuntimeError:  # changed by another thread as it was read: the scan finds them
+        tracked = set()
+    groups = tracked | set(_own_session_children())
     for pgid in groups:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(pgid, signal.SIGKILL)
     return len(groups)
+
+
+def _own_session_children() -> list[int]:
+    """The children of this process that lead a session (and a process group) of their own."""
+    me = os.getpid()
+    out: list[int] = []
+    try:
+        entries = os.listdir("/proc")
+    except OSError:  # no /proc: the tracked groups are all there is
+        return out
+    for name in entries:
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat", encoding="ascii", errors="replace") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        ppid, pgrp, session = int(fields[1]), int(fields[2]), int(fields[3])
+        if ppid == me and pgrp == session == int(name):
+            out.append(int(name))
+    return out
 
 
 def running_groups() -> list[int]:

@@ -192,3 +192,16 @@ def test_kill_groups_stops_what_run_group_runs(tmp_path: Path) -> None:
     thread.join(timeout=WAIT_S)
     assert not thread.is_alive() and not errors  # it ended (killed), and said so by its code
     assert not _alive(group) and supervise.running_groups() == []
+
+
+def test_kill_groups_finds_a_group_not_tracked_yet() -> None:
+    """SIGTERM handled between Popen's return and the group's tracking: the child leading a
+    session of its own is found all the same (this race once left a binary running)."""
+    binary = subprocess.Popen(["sleep", "3000"], start_new_session=True)
+    try:
+        assert binary.pid not in supervise.running_groups()
+        assert supervise.kill_groups() >= 1
+        assert binary.wait(timeout=WAIT_S) == -signal.SIGKILL
+    finally:
+        if binary.poll() is None:
+            binary.kill()
