@@ -10,6 +10,7 @@ events a second, so a kill lands before, during or after a run's search.
 from __future__ import annotations
 
 import contextlib
+import http.client
 import json
 import os
 import random
@@ -189,8 +190,8 @@ class Served:
                     return
                 if not page["events"]:
                     time.sleep(0.05)
-        except (OSError, urllib.error.URLError, ValueError):
-            return  # the server died under it
+        except (OSError, urllib.error.URLError, http.client.HTTPException, ValueError):
+            return  # the server died under it (mid-answer: an incomplete read)
 
     def join(self) -> None:
         for thread in self.threads:
