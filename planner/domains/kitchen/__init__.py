@@ -21,12 +21,11 @@ from planner.domains.kitchen.problem import (
 from planner.domains.kitchen.view import KitchenView
 from planner.domains.manipulation.domain import (
     LazySamplers,
-    LazyValidator,
-    stream_inputs,
+    manipulation_spec,
     with_bindings,
 )
 from planner.domains.manipulation.problem import initial_pose_name
-from planner.domains.spec import DomainSpec, LoadedDomain
+from planner.domains.spec import LoadedDomain
 
 if TYPE_CHECKING:
     from planner.domains.kitchen.samplers import SamplerConfig
@@ -35,25 +34,17 @@ SAMPLERS = "planner.domains.kitchen.samplers"  # imported when first sampling: p
 MODEL = Path(__file__).resolve().parent / "model.pt"  # the shipped model (docs/learning.md)
 
 
-DOMAIN = DomainSpec(
+DOMAIN = manipulation_spec(
     name="kitchen",
     description="the PR2 kitchen: clean blocks at the sink, cook them on the stove",
+    package="planner.domains.kitchen",
     problem_from_scene=problem_from_scene,
-    bindings=LazySamplers(SAMPLERS),
-    value_types=VALUE_TYPES,
-    validate=LazyValidator("planner.domains.kitchen.validate"),
     static_context=static_context,
+    value_types=VALUE_TYPES,
     view=KitchenView(),
     features=KitchenFeatures(),
-    input_kinds=stream_inputs("pose", "grasp", "conf"),
+    kinds=("pose", "grasp", "conf"),
     model=MODEL,
-    diversity_ignore=("move",),  # moves only connect configurations; compare what is done
-    # Where the robot stands and how it holds the block do not change where a block fits.
-    evidence_ignore=("at-conf", "can-move", "holding"),
-    # A placement looks only at the blocks already on the platform, not at where the robot
-    # stands or how it holds the block: it can be sampled before that block's grasp and IK, so
-    # the blocks' placements come together and a full stove is blamed on the placements alone.
-    unread={"sample-placement": ("at-conf", "can-move", "holding")},
 )
 
 

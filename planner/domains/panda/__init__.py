@@ -14,8 +14,7 @@ from typing import TYPE_CHECKING
 
 from planner.domains.manipulation.domain import (
     LazySamplers,
-    LazyValidator,
-    stream_inputs,
+    manipulation_spec,
     with_bindings,
 )
 from planner.domains.manipulation.problem import initial_pose_name
@@ -28,7 +27,7 @@ from planner.domains.panda.problem import (
 )
 from planner.domains.panda.values import VALUE_TYPES
 from planner.domains.panda.view import PandaView
-from planner.domains.spec import DomainSpec, LoadedDomain
+from planner.domains.spec import LoadedDomain
 
 if TYPE_CHECKING:
     from planner.domains.panda.samplers import SamplerConfig
@@ -37,23 +36,19 @@ SAMPLERS = "planner.domains.panda.samplers"  # imported when first sampling: pyb
 MODEL = Path(__file__).resolve().parent / "model.pt"  # the shipped model (docs/panda.md)
 
 
-DOMAIN = DomainSpec(
+DOMAIN = manipulation_spec(
     name="panda",
     description="a Franka Panda clears a cluttered table into a tray with little room",
+    package="planner.domains.panda",
     problem_from_scene=problem_from_scene,
-    bindings=LazySamplers(SAMPLERS),
-    value_types=VALUE_TYPES,
-    validate=LazyValidator("planner.domains.panda.validate"),
     static_context=static_context,
+    value_types=VALUE_TYPES,
     view=PandaView(),
     features=PandaFeatures(),
-    input_kinds=stream_inputs("panda_pose", "panda_grasp", "panda_conf"),
+    kinds=("panda_pose", "panda_grasp", "panda_conf"),
     model=MODEL if MODEL.is_file() else None,
-    diversity_ignore=("move",),  # moves only connect configurations; compare what is done
-    # Where the arm is and how it holds the block do not change where a block fits.
-    evidence_ignore=("at-conf", "can-move", "holding", "obstructed"),
-    # A placement reads only the blocks already in the region, not the arm or the hand.
-    unread={"sample-placement": ("at-conf", "can-move", "holding", "hand-empty", "obstructed")},
+    blocking=("obstructed",),  # a tall obstacle in the way of a grasp
+    placement_unread=("hand-empty", "obstructed"),
 )
 
 
