@@ -320,3 +320,45 @@ def test_with_samplers_runs_the_kitchen_with_another_sampler_config(
     assert failed == {"sample-placement"}
     with pytest.raises(ValueError, match="takes the kitchen"):
         with_samplers(load_domain(str(TUTORIAL)), SamplerConfig())
+
+
+def test_ik_fails_at_once_where_the_gripper_collides_and_answers_as_every_base_would() -> None:
+    """``gripper_first``: at an IK solution in collision the gripper is checked alone; where it
+    collides, no base pose can help (the gripper's place follows from the grasp), so the query
+    fails at once. Every answer is the one trying every base pose gives, success for success."""
+    _, problem = problem_for_scene("kitchen-8", seed=0)
+    geometry = problem.values[GEOMETRY_KEY]
+    poses = geometry.initial_poses(0)  # type: ignore[attr-defined]
+    values = {f"p-{b}": p for b, p in poses.items()}
+    on_table = StreamContext(frozenset(Atom("at-pose", (b, f"p-{b}")) for b in poses), values)
+    answers: dict[bool, list[tuple[Conf] | Failure]] = {}
+    for gripper_first in (True, False):
+        config = SamplerConfig(gripper_first=gripper_first)
+        samplers = KitchenSamplers(geometry, random.Random(0), config=config)  # type: ignore[arg-type]
+        try:
+            samplers.world.set_blocks(poses)
+            answers[gripper_first] = [
+                samplers.inverse_kinematics(
+                    b, poses[b], samplers.sample_grasp(b)[0], context=on_table
+                )
+                for b in sorted(poses)
+                for _ in range(3)
+            ]
+        finally:
+            samplers.close()
+    at_once = [a for a in answers[True] if isinstance(a, Failure) and "any base" in a.reason]
+    assert at_once, answers[True]  # the table's neighbours stand in some grasps' way
+    for fast, full in zip(answers[True], answers[False], strict=True):
+        if isinstance(fast, Failure):
+            assert isinstance(full, Failure), (fast, full)
+        else:
+            assert fast == full
+
+
+def test_a_true_false_setting_reads_its_words_and_refuses_others() -> None:
+    config = SamplerConfig()
+    assert config.with_text("gripper_first", "off").gripper_first is False
+    assert config.with_text("gripper_first", "True").gripper_first is True
+    assert config.with_text("ik_attempts", "12").ik_attempts == 12
+    with pytest.raises(ValueError, match="gripper_first is true or false"):
+        config.with_text("gripper_first", "maybe")

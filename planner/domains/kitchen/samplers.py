@@ -91,6 +91,11 @@ class SamplerConfig:
     workspace_margin: float = 1.2  # base may roam this far beyond the fixtures, metres
     clearance: float = 0.015  # metres kept from obstacles along planned motions
     max_straight: float = 0.6  # radians any joint may turn on the straight approach move
+    # At an IK solution in collision (at its approach in the clearance), check the gripper and
+    # the held block alone: where they are follows from the grasp, not the base or the arm, so
+    # if they collide every base pose fails the same way and the query fails at once, with the
+    # answer the whole loop would give ("gripper_first"; False: try every base pose).
+    gripper_first: bool = True
 
     def __post_init__(self) -> None:
         if self.base_order not in BASE_ORDERS:
@@ -257,6 +262,8 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
         if not bases:
             return Failure("no base pose within reach and clear of the fixtures")
         rejected: Counter[str] = Counter()  # why each base pose or IK solution was refused
+        gripper_checked = {"grasp": not self.config.gripper_first}
+        gripper_checked["approach"] = gripper_checked["grasp"]
         for base in bases:
             world.hold(None)
             if placing:
@@ -272,6 +279,10 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
                 world.set_conf(conf)
                 if world.robot_collides(ignore=touching):
                     rejected["grasp in collision"] += 1
+                    if not gripper_checked["grasp"]:
+                        gripper_checked["grasp"] = True
+                        if world.gripper_collides(ignore=touching):
+                            return Failure("the gripper collides at the grasp, from any base pose")
                     continue
                 approach = arm_ik(self.arm, pre[0], pre[1], torso=torso, nearest_to=arm)
                 if not approach:
@@ -289,6 +300,13 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
                 # Motion planning starts and ends here, so it must keep the same clearance.
                 if world.robot_collides(clearance=self.config.clearance):
                     rejected["approach within the clearance"] += 1
+                    if not gripper_checked["approach"]:
+                        gripper_checked["approach"] = True
+                        if world.gripper_collides(clearance=self.config.clearance):
+                            return Failure(
+                                "the gripper is within the clearance at the approach, "
+                                "from any base pose"
+                            )
                     continue
                 if not placing and not self._lifted_clear(conf, block, grasp):
                     rejected["lifted block within the clearance"] += 1

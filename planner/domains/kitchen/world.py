@@ -17,6 +17,7 @@ from planner.robots.pr2.model import (
     ARM_JOINTS,
     ARM_LINKS,
     ARMS,
+    GRIPPER_LINKS,
     REST_ARM_CONF,
     TOOL_LINK,
     TORSO_JOINT,
@@ -68,6 +69,11 @@ class KitchenWorld(BlocksWorld[Grasp]):
             self.robot,
             self_pairs=[(link, base) for link in self.arm_links for base in self.base_links],
             config=collision,
+        )
+        # The gripper alone (rigid below the wrist: where it is follows from the tool's pose,
+        # whatever the base and the arm), for what no IK solution can avoid.
+        self.gripper_collision = RobotCollision(
+            c, self.robot, links=[links[n] for n in GRIPPER_LINKS[arm]], config=collision
         )
         # What pybullet holds now, so that a set_* call only resets what changed (a base move
         # leaves the joints alone, an arm move the base): None until first set.
@@ -122,3 +128,9 @@ class KitchenWorld(BlocksWorld[Grasp]):
         for a clearance so that what they plan between checked states stays free too.
         """
         return self._collides(self.collision, self.obstacles(ignore), clearance, self._base_links)
+
+    def gripper_collides(self, *, ignore: Iterable[str] = (), clearance: float = 0.0) -> bool:
+        """The gripper and what it holds against fixtures and placed blocks, as
+        :meth:`robot_collides` checks them (so True here means True there): a collision every
+        configuration with the tool where it is now has, from any base pose."""
+        return self._collides(self.gripper_collision, self.obstacles(ignore), clearance, ())

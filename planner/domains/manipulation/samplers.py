@@ -194,10 +194,17 @@ class BlockSamplers(Generic[W, P, G, Q, J]):
 
 
 def with_text(config: C, name: str, text: str) -> C:
-    """``config`` with its text or number field ``name`` set from ``text`` (as a command line
-    gives it); a ValueError says what is wrong."""
+    """``config`` with its text, number or true/false field ``name`` set from ``text`` (as a
+    command line gives it); a ValueError says what is wrong."""
     default = getattr(config, name, None)
     if not isinstance(default, str | int | float):
-        raise ValueError(f"{name!r} is not a text or number field of {type(config).__name__}")
+        raise ValueError(
+            f"{name!r} is not a text, number or true/false field of {type(config).__name__}"
+        )
+    if isinstance(default, bool):  # bool("off") is True: spell the two values out
+        words = {"true": True, "on": True, "1": True, "false": False, "off": False, "0": False}
+        if text.lower() not in words:
+            raise ValueError(f"{name} is true or false (on/off, 1/0), got {text!r}")
+        return replace(config, **{name: words[text.lower()]})
     changes: dict[str, Any] = {name: type(default)(text)}
     return replace(config, **changes)

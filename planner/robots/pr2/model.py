@@ -101,6 +101,11 @@ ARM_LINKS: dict[str, tuple[str, ...]] = {
     )
     for arm, p in _PREFIX.items()
 }
+# The links rigid below each wrist (the fingers at a fixed opening): placed by the tool's pose.
+GRIPPER_LINKS: dict[str, tuple[str, ...]] = {
+    arm: (f"{p}_gripper_palm_link", f"{p}_gripper_l_finger_link", f"{p}_gripper_r_finger_link")
+    for arm, p in _PREFIX.items()
+}
 # Joints without limits; JOINT_LIMITS gives them (-pi, pi), the range angles are wrapped into.
 CONTINUOUS_JOINTS: frozenset[str] = frozenset(
     f"{p}_{s}" for p in _PREFIX.values() for s in ("forearm_roll_joint", "wrist_roll_joint")
