@@ -59,7 +59,7 @@ class SamplerConfig:
     # blocks placed one after another all fit in 154 of 200 draws on kitchen-20's stove at 1.0,
     # 21 at 0.75 (kitchen-12: 186 and 62). At 0.75 learned spent kitchen-20's 1800 s re-packing
     # the stove (seed 1000: 5,543 placements refused); at 1.0 it plans it, and plans kitchen-12
-    # and -16 in 31% and 40% less time (docs/BENCHMARKS.md, kitchen, 4 to 20 blocks).
+    # and -16 in 31% and 40% less time (docs/BENCHMARKS.md, why kitchen-20 stalled).
     corner_fraction: float = 1.0
     corner_jitter: float = 0.01  # metres a packed block may sit in from its grid slot
     # Collision-free base poses drawn per IK query, tried nearest first: the more drawn, the
@@ -93,8 +93,8 @@ class SamplerConfig:
     max_straight: float = 0.6  # radians any joint may turn on the straight approach move
     # At an IK solution in collision (at its approach in the clearance), check the gripper and
     # the held block alone: where they are follows from the grasp, not the base or the arm, so
-    # if they collide every base pose fails the same way and the query fails at once, with the
-    # answer the whole loop would give ("gripper_first"; False: try every base pose).
+    # if they collide every base pose fails and the query fails at once: the same outcome as
+    # the whole loop's, its reason naming the gripper (False: try every base pose).
     gripper_first: bool = True
 
     def __post_init__(self) -> None:
@@ -262,8 +262,7 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
         if not bases:
             return Failure("no base pose within reach and clear of the fixtures")
         rejected: Counter[str] = Counter()  # why each base pose or IK solution was refused
-        gripper_checked = {"grasp": not self.config.gripper_first}
-        gripper_checked["approach"] = gripper_checked["grasp"]
+        check_grasp = check_approach = self.config.gripper_first  # once each per query
         for base in bases:
             world.hold(None)
             if placing:
@@ -279,8 +278,8 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
                 world.set_conf(conf)
                 if world.robot_collides(ignore=touching):
                     rejected["grasp in collision"] += 1
-                    if not gripper_checked["grasp"]:
-                        gripper_checked["grasp"] = True
+                    if check_grasp:
+                        check_grasp = False
                         if world.gripper_collides(ignore=touching):
                             return Failure("the gripper collides at the grasp, from any base pose")
                     continue
@@ -300,8 +299,8 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
                 # Motion planning starts and ends here, so it must keep the same clearance.
                 if world.robot_collides(clearance=self.config.clearance):
                     rejected["approach within the clearance"] += 1
-                    if not gripper_checked["approach"]:
-                        gripper_checked["approach"] = True
+                    if check_approach:
+                        check_approach = False
                         if world.gripper_collides(clearance=self.config.clearance):
                             return Failure(
                                 "the gripper is within the clearance at the approach, "
