@@ -94,7 +94,9 @@ class SamplerConfig:
     # At an IK solution in collision (at its approach in the clearance), check the gripper and
     # the held block alone: where they are follows from the grasp, not the base or the arm, so
     # if they collide every base pose fails and the query fails at once: the same outcome as
-    # the whole loop's, its reason naming the gripper (False: try every base pose).
+    # the whole loop's, its reason naming the gripper (False: try every base pose). The failure
+    # says exhausted: asked again with the same inputs in the same world it would fail again,
+    # so the search remembers it and does not ask (as the Panda's hand blocked both ways).
     gripper_first: bool = True
 
     def __post_init__(self) -> None:
@@ -281,7 +283,10 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
                     if check_grasp:
                         check_grasp = False
                         if world.gripper_collides(ignore=touching):
-                            return Failure("the gripper collides at the grasp, from any base pose")
+                            return Failure(
+                                "the gripper collides at the grasp, from any base pose",
+                                exhausted=True,
+                            )
                     continue
                 approach = arm_ik(self.arm, pre[0], pre[1], torso=torso, nearest_to=arm)
                 if not approach:
@@ -304,7 +309,8 @@ class KitchenSamplers(BlockSamplers[KitchenWorld, BlockPose, Grasp, Conf, Trajec
                         if world.gripper_collides(clearance=self.config.clearance):
                             return Failure(
                                 "the gripper is within the clearance at the approach, "
-                                "from any base pose"
+                                "from any base pose",
+                                exhausted=True,
                             )
                     continue
                 if not placing and not self._lifted_clear(conf, block, grasp):
