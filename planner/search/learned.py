@@ -134,6 +134,9 @@ def trusted_streams(predictor: Predictor) -> frozenset[str] | None:
     return None if said is None else said()
 
 
+EXPLORE_STREAMS = 36  # plans longer than this explore less (LearnedConfig.explore_by_length)
+
+
 @dataclass(frozen=True)
 class LearnedConfig:
     """The learned planner's parts. All off (:meth:`paper`) is the paper's planner; the
@@ -142,6 +145,18 @@ class LearnedConfig:
 
     c_explore: float = 0.05
     """UCT exploration weight on values normalised to (0, 1] by the best plan's Q."""
+
+    explore_by_length: bool = True
+    """In a stream plan longer than ``EXPLORE_STREAMS`` streams the exploration weight shrinks
+    in proportion: ``c_explore * EXPLORE_STREAMS / n``. Binding one more stream gains about one
+    stream's share of the plan's value, so the longer the plan, the smaller the differences the
+    bonus competes with: at 0.05 (set on kitchen-4's 36 streams) kitchen-20 (180) and -24 (216)
+    re-drew their first placements over and over (2,064 new branches at depths 0 to 29 in one
+    timed-out kitchen-20 run), and at 0.01 (this rule's weight at 180 streams) both solved.
+    Plans of up to 36 streams (every Panda, kitchen and PDDLStream 2-D scene to kitchen-4) keep
+    0.05. Off: ``c_explore`` at every length.
+
+    Measured: docs/BENCHMARKS.md, *Exploration weight: kitchen-20 and -24*."""
 
     dead_ends: bool = True
     """A node whose next query failed (or led only to dead ends) more often than its
@@ -612,8 +627,20 @@ class LearnedPolicy:
     def _value(self, q: float) -> float:
         return self._scale / (self._scale + q) if self._scale > 0 else 1.0 / (1.0 + q)
 
-    def _bonus(self, visits: int, parent_visits: int) -> float:
-        return self.config.c_explore * math.sqrt(math.log(parent_visits + 1) / (visits + 1))
+    def _bonus(self, visits: int, parent_visits: int, plan_index: int | None = None) -> float:
+        """UCT's bonus in stream plan ``plan_index`` (None: the shortest plan's weight)."""
+        return self._c(plan_index) * math.sqrt(math.log(parent_visits + 1) / (visits + 1))
+
+    def _c(self, plan_index: int | None) -> float:
+        """The exploration weight in a stream plan (``explore_by_length``)."""
+        c = self.config.c_explore
+        if not self.config.explore_by_length or not self.skeletons:
+            return c
+        if plan_index is None:
+            n = min(len(p.stream_plan) for p in self.skeletons)
+        else:
+            n = len(self.skeletons[plan_index].stream_plan)
+        return c * min(1.0, EXPLORE_STREAMS / max(n, 1))
 
     # --- trust (LearnedConfig.trust) -----------------------------------------------------------
 
@@ -670,7 +697,10 @@ class LearnedPolicy:
             return max(plans, key=lambda n: self._value(self._estimate(tree, n)))
         return max(
             plans,
-            key=lambda n: self._value(self._estimate(tree, n)) + self._bonus(n.visits, root.visits),
+            key=lambda n: (
+                self._value(self._estimate(tree, n))
+                + self._bonus(n.visits, root.visits, n.plan_index)
+            ),
         )
 
     def ask_more(self, tree: Tree, plans_open: int, asked: int, ask_s: float) -> bool:
@@ -692,7 +722,8 @@ class LearnedPolicy:
         root = tree[ROOT]
         bonus = not self.config.plans_by_estimate
         best = max(
-            self._value(self._estimate(tree, p)) + (self._bonus(p.visits, root.visits) * bonus)
+            self._value(self._estimate(tree, p))
+            + (self._bonus(p.visits, root.visits, p.plan_index) * bonus)
             for p in plans
         )
         new = self._value(fresh) + self._bonus(asked, root.visits) * bonus
@@ -713,9 +744,11 @@ class LearnedPolicy:
             return True
         if not self._informed(node):
             return should_widen(node.visits, len(node.children), self.baseline.widen_k)
-        again = self._value(self.q(tree, node)) + self._bonus(len(node.children), node.visits)
+        plan = node.plan_index
+        again = self._value(self.q(tree, node)) + self._bonus(len(node.children), node.visits, plan)
         best = max(
-            self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits) for c in live
+            self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits, plan)
+            for c in live
         )
         return again > best
 
@@ -727,7 +760,10 @@ class LearnedPolicy:
             )
         return max(
             tree.live_children(node.id),
-            key=lambda c: self._value(self._estimate(tree, c)) + self._bonus(c.visits, node.visits),
+            key=lambda c: (
+                self._value(self._estimate(tree, c))
+                + self._bonus(c.visits, node.visits, node.plan_index)
+            ),
         )
 
     def leaf_value(self, leaf: Node, plan: AbstractPlan) -> float:

@@ -6,9 +6,11 @@ test_language_search.py) whose outcome changes when the part is switched off."""
 from __future__ import annotations
 
 import json
+import math
 import time
 import zlib
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +22,7 @@ from planner.events import Emitter, ListSink, ModelPrediction
 from planner.search.binding import stream_contexts
 from planner.search.costs import P_FLOOR
 from planner.search.learned import (
+    EXPLORE_STREAMS,
     LearnedConfig,
     LearnedPolicy,
     StreamCost,
@@ -328,3 +331,25 @@ def test_the_search_goes_back_to_the_plan_it_has_started(plans_by_estimate: bool
     assert policy.q(tree, started) == pytest.approx(policy.q(tree, untried))
     assert policy.q(tree, bound) < policy.q(tree, started)
     assert policy.pick_plan(tree).id == (started.id if plans_by_estimate else untried.id)
+
+
+@pytest.mark.parametrize("by_length", [True, False])
+def test_a_long_stream_plan_explores_in_proportion_less(by_length: bool) -> None:
+    """explore_by_length: up to EXPLORE_STREAMS streams a plan has UCT's weight c_explore; a
+    plan five times as long has a fifth of it (kitchen-20's 180 streams: 0.01), so a bonus
+    competes with value differences that shrink as the plan grows. Off: c_explore at every
+    length. The paper's planner keeps it off."""
+    search, policy = make(ListSink(), config=LearnedConfig(explore_by_length=by_length))
+    short = search.skeletons[0]
+    assert len(short.stream_plan) <= EXPLORE_STREAMS
+    times = 5 * EXPLORE_STREAMS // len(short.stream_plan)
+    long = replace(
+        short, stream_plan=tuple(short.stream_plan) * times, first_use=short.first_use * times
+    )
+    policy.plans_added([short, long], [search.states[0], search.states[0] * times])
+    weight = policy.config.c_explore
+    assert policy._bonus(3, 100, 0) == pytest.approx(weight * math.sqrt(math.log(101) / 4))
+    ratio = policy._bonus(3, 100, 1) / policy._bonus(3, 100, 0)
+    n = len(long.stream_plan)
+    assert ratio == pytest.approx(EXPLORE_STREAMS / n if by_length else 1.0)
+    assert LearnedConfig.paper().explore_by_length is False
