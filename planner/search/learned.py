@@ -156,7 +156,7 @@ class LearnedConfig:
     Plans of up to 36 streams (every Panda, kitchen and PDDLStream 2-D scene to kitchen-4) keep
     0.05. Off: ``c_explore`` at every length.
 
-    Measured: docs/BENCHMARKS.md, *Exploration weight: kitchen-20 and -24*."""
+    Measured: docs/BENCHMARKS.md, *Exploration weight: kitchen-20 and kitchen-24*."""
 
     dead_ends: bool = True
     """A node whose next query failed (or led only to dead ends) more often than its
