@@ -153,8 +153,8 @@ class LearnedConfig:
     bonus competes with: at 0.05 (set on kitchen-4's 36 streams) kitchen-20 (180) and -24 (216)
     re-drew their first placements over and over (2,064 new branches at depths 0 to 29 in one
     timed-out kitchen-20 run), and at 0.01 (this rule's weight at 180 streams) both solved.
-    Plans of up to 36 streams (every Panda, kitchen and PDDLStream 2-D scene to kitchen-4) keep
-    0.05. Off: ``c_explore`` at every length.
+    Plans of up to 36 streams (kitchen-4, panda-4, PDDLStream's 2-D scenes) keep 0.05; panda-6
+    (48) gets 0.0375, kitchen-8 (72) 0.025. Off: ``c_explore`` at every length.
 
     Measured: docs/BENCHMARKS.md, *Exploration weight: kitchen-20 and kitchen-24*."""
 
