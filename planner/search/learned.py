@@ -726,7 +726,7 @@ class LearnedPolicy:
             + (self._bonus(p.visits, root.visits, p.plan_index) * bonus)
             for p in plans
         )
-        new = self._value(fresh) + self._bonus(asked, root.visits) * bonus
+        new = self._value(fresh) + (self._bonus(asked, root.visits) if bonus else 0.0)
         return new > best
 
     def plans_added(
