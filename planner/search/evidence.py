@@ -49,6 +49,12 @@ class NodeQueries(Protocol):
         sampler given the context may read)."""
         ...
 
+    def given(self, node: Node) -> set[str]:
+        """The objects the next query's answer is a function of, as the search's memory of
+        known failures keys it: its inputs and the objects of every fluent fact of the state
+        it is given (nothing left out as a guess)."""
+        ...
+
 
 @dataclass
 class Evidence:
@@ -59,6 +65,11 @@ class Evidence:
     # An exhausted node (its stream said it has nothing more for these inputs) with nothing
     # live below is a dead end at once, whatever its prediction (LearnedConfig.exhausted_dead).
     exhausted_dead: bool = True
+    # With exhausted_dead: where the sampler reads the whole state it is given, a node whose
+    # query came back as a known failure is a dead end too, its reason every object of that
+    # state and its inputs (what the search's memory of the failure keys on:
+    # LearnedConfig.exhausted_given).
+    exhausted_given: bool = True
     # Per dead node: its reason (the union of its marks' reasons).
     reasons: dict[int, frozenset[str]] = field(default_factory=dict)
     _seen: int = 0
@@ -115,18 +126,33 @@ class Evidence:
     def _evaluate(self, tree: Tree, node: Node) -> None:
         """Whether the node's own failures make it a dead end, and why. An exhausted node
         with nothing live below is one at once (with ``exhausted_dead``, where what its query
-        reads is known): its stream will give nothing more, so its reason is what its failed
-        queries (if any) and the dead ends below it depend on."""
+        reads is known, :meth:`_exhausted_reads`): its stream will give nothing more, so its
+        reason is what its failed queries (if any) and the dead ends below it depend on."""
         reason: frozenset[str] | None = None
         first = self.queries.first(node) if node.success and node.depth > 0 else None
         if first is not None and node.children and not self._live[node.id]:
             below = frozenset(self._below.get(node.id) or ())
             if self._unexplained(tree, node, first):
                 reason = frozenset(self.queries.relevant(node)) | below
-            elif self.exhausted_dead and node.exhausted and self.queries.precise(node):
-                failed = any(not tree[c].success for c in node.children)
-                reason = below | (frozenset(self.queries.relevant(node)) if failed else frozenset())
+            elif self.exhausted_dead and node.exhausted:
+                reads = self._exhausted_reads(node)
+                if reads is not None:
+                    failed = any(not tree[c].success for c in node.children)
+                    reason = below | (reads if failed else frozenset())
         self._set_source(tree, node.id, node, reason)
+
+    def _exhausted_reads(self, node: Node) -> frozenset[str] | None:
+        """What an exhausted node's failed queries depend on, where that is known (None: not
+        known, the node is left alone): what its sampler reads (its inputs and declared
+        fluents, but for those a failure is taken not to depend on), or, for a sampler that
+        reads the whole state it is given whose failure came back as a known one
+        (``exhausted_given``), its inputs and every object of that state: the same failure
+        came back for the same ones, whatever was re-sampled in between."""
+        if self.queries.precise(node):
+            return frozenset(self.queries.relevant(node))
+        if self.exhausted_given and node.known_failure:
+            return frozenset(self.queries.given(node))
+        return None
 
     def _unexplained(self, tree: Tree, node: Node, first: StreamCost) -> bool:
         """Whether the node's children, none of them alive, failed more often than the

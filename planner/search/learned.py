@@ -255,6 +255,26 @@ class LearnedConfig:
     where counting each death as a failure of the sure placement made 1,682 and 699); not
     measured on the current benchmarks."""
 
+    exhausted_given: bool = True
+    """With ``exhausted_dead``: a node whose sampler reads the whole state it is given (bound
+    with context, as the kitchen's and the Panda's IK are) and whose query came back as a
+    known failure (``TreeSearch.memo_exhausted``: the same inputs in the same state failed
+    before and said they will) is a dead end too, its reason its inputs and every object of
+    that state, not the part a domain's ``evidence_ignore`` keeps. The memory keys on those
+    objects, so the failure's return proves that whatever was re-sampled since, below the
+    node that bound one of them, did not matter: the search backjumps there. A stream plan
+    samples the placements before the IK that picks the first block, so the IK failure a grasp
+    caused sat below twenty-odd placements the state at the failure does not hold. A first
+    failure is left alone, as before: the guess of what it depends on is the domain's.
+    Off: the node above sees a failure its prediction explains (``known_failures``), and the
+    search re-draws whatever lies between (kitchen-24 seed 1000: the same 20 stove placements
+    14,855 times, the same known failure below 9,728 times, no solution in 1800 s).
+
+    Measured: docs/BENCHMARKS.md, *Known failures backjump*: kitchen-24 seed 1000 solved in
+    34 s of planning; panda-6 and kitchen-8, 10 seeds each, identical trials. The first form
+    of the rule, a dead end at the first exhausted failure, cost panda-6 5.3% of total time
+    (0.1% to 13.3%): the domain's guess stands there."""
+
     doubt_plans: bool = True
     """A stream plan that relies on a stream instance the search doubts (the same instance of
     the optimistic task, over every plan and node, asked often with no success, or proved
@@ -347,6 +367,9 @@ class _Queries:
     def precise(self, node: Node) -> bool:
         return self.policy._precise(node)
 
+    def given(self, node: Node) -> set[str]:
+        return self.policy._given(node)
+
 
 @dataclass
 class LearnedPolicy:
@@ -381,6 +404,7 @@ class LearnedPolicy:
     _readers: list[dict[str, list[int]]] = field(default_factory=list)
     _seen: int = 0  # nodes the refreshes have taken in
     _relevant_at: dict[tuple[int, int], frozenset[str]] = field(default_factory=dict)
+    _given_at: dict[tuple[int, int], frozenset[str]] = field(default_factory=dict)
     _root_costs: dict[_RootKey, StreamCost] = field(default_factory=dict)  # rows of plan nodes
     _fluent_state: dict[int, tuple[frozenset[Atom], frozenset[Atom]]] = field(
         default_factory=dict
@@ -395,7 +419,10 @@ class LearnedPolicy:
         c = self.config
         self.encode = remembered(self.encode)
         self._evidence = Evidence(
-            _Queries(self), dead_ends=c.dead_ends, exhausted_dead=c.exhausted_dead
+            _Queries(self),
+            dead_ends=c.dead_ends,
+            exhausted_dead=c.exhausted_dead,
+            exhausted_given=c.exhausted_given,
         )
 
     @property
@@ -593,6 +620,21 @@ class LearnedPolicy:
                 if a.predicate in readable and a.predicate not in self.evidence_ignore:
                     out.update(a.args)
             found = self._relevant_at[where] = frozenset(out)
+        return set(found)
+
+    def _given(self, node: Node) -> set[str]:
+        """Objects ``node``'s next query is given: its inputs and the objects of every fluent
+        fact of its state (what :func:`planner.search.queries.query_context` records); a fresh
+        set each call."""
+        where = (node.plan_index, node.depth)
+        found = self._given_at.get(where)
+        if found is None:
+            inst = self.skeletons[node.plan_index].stream_plan[node.depth]
+            out = set(inst.inputs)
+            for a in self.states[node.plan_index][node.depth]:
+                if a.predicate in self.fluents:
+                    out.update(a.args)
+            found = self._given_at[where] = frozenset(out)
         return set(found)
 
     def _precise(self, node: Node) -> bool:

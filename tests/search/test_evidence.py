@@ -68,10 +68,18 @@ def test_dead_ends_found_step_by_step_are_those_of_the_whole_tree(tmp_path: Path
 
 class _Told:
     """Predictions and relevant objects given by hand: every query is predicted to succeed 90%
-    of the time; a node's next query reads what ``reads`` says."""
+    of the time; a node's next query reads what ``reads`` says, exactly (``precise``) or as a
+    guess about a sampler given the whole state, whose objects ``given`` says."""
 
-    def __init__(self, reads: dict[int, set[str]]) -> None:
+    def __init__(
+        self,
+        reads: dict[int, set[str]],
+        precise: bool = True,
+        given: dict[int, set[str]] | None = None,
+    ) -> None:
         self.reads = reads
+        self.exact = precise
+        self.state = given or {}
 
     def first(self, node: Node) -> StreamCost | None:
         return StreamCost(0.9, 0.01, 0.01, 0.0)
@@ -80,7 +88,53 @@ class _Told:
         return set(self.reads.get(node.id, ()))
 
     def precise(self, node: Node) -> bool:
-        return True
+        return self.exact
+
+    def given(self, node: Node) -> set[str]:
+        return set(self.state.get(node.id, ()))
+
+
+def test_a_known_failure_of_a_sampler_given_the_state_backjumps_over_what_it_was_not_given() -> (
+    None
+):
+    """A grasp of b8 (opt-g), then placements of other blocks on the stove, then the IK picking
+    b8 at its start pose with that grasp: it fails and says exhausted (the gripper collides at
+    the grasp), and the state it is given holds none of the placements. The IK's sampler reads
+    the whole state, so the domain's guess of what it reads is not precise: the first failure
+    leaves the node alone. Under a re-drawn placement the same failure comes back as a known
+    one (the memory keys on the inputs and the state's objects): what was re-drawn did not
+    matter, the failure is the grasp's, and every node from there up to the grasp is a dead
+    end (the search samples another grasp, not more placements). Off (exhausted_given), the
+    placements and the grasp stay live."""
+    tree = Tree()
+    plan = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    grasp = tree.add(plan.id, plan_index=0, depth=1, success=True, outputs={"opt-g": 1.0})
+    pa = tree.add(grasp.id, plan_index=0, depth=2, success=True, outputs={"opt-pa": 1.0})
+    guessed: dict[int, set[str]] = {}  # the domain leaves the grasp's fluents out
+    given: dict[int, set[str]] = {}
+
+    def ik_below(parent: Node, x: float, known: bool) -> Node:
+        placed = tree.add(parent.id, plan_index=0, depth=3, success=True, outputs={"opt-pb": x})
+        tree.add(placed.id, plan_index=0, depth=4, success=False)  # ik(b8 p0-b8 opt-g) failed
+        placed.exhausted = True
+        placed.known_failure = known
+        guessed[placed.id] = {"b8", "p0-b8"}
+        given[placed.id] = {"b8", "p0-b8", "opt-g", "q0", "p0-b1"}
+        return placed
+
+    first = ik_below(pa, 1.0, known=False)
+    evidence = Evidence(_Told(guessed, precise=False, given=given))
+    evidence.refresh(tree)
+    assert not evidence.dead  # one failure of a sampler given the state: left alone
+    again = ik_below(pa, 2.0, known=True)
+    evidence.refresh(tree)
+    assert again.id in evidence.dead and first.id not in evidence.dead
+    assert {pa.id, grasp.id} <= set(evidence.dead)
+    assert "opt-g" in evidence.dead[grasp.id]
+    assert plan.id not in evidence.dead  # the grasp bound what failed: the jump stops there
+    off = Evidence(_Told(guessed, precise=False, given=given), exhausted_given=False)
+    off.refresh(tree)
+    assert not off.dead
 
 
 def placement_that_left_no_room(tries: int) -> tuple[Tree, int, dict[int, set[str]]]:

@@ -237,6 +237,37 @@ def test_a_dead_end_blames_the_last_choice_it_depends_on(dead_ends: bool) -> Non
     assert policy.expand(tree, choose_a)  # now: sample another pose for a
 
 
+@pytest.mark.parametrize("given", [True, False])
+def test_a_known_failure_backjumps_to_what_its_state_holds(given: bool) -> None:
+    """exhausted_given: b's pose sampler (here reading the whole state it is given) found
+    nothing and said it will not, and the same failure came back as a known one: what it was
+    given is its inputs and the objects of its state, which holds a at its pose, so the search
+    backjumps over the choices in between to a's pose and samples another. Off: a's pose
+    stays live (one known failure is explained by its own prediction)."""
+    search, policy = make(ListSink(), config=LearnedConfig(exhausted_given=given))
+    tree = search.tree
+    plan = search.skeletons[0]
+    a_pose = plan.stream_plan[1].outputs[0]
+    top = tree.add(ROOT, plan_index=0, depth=0, success=True)
+    choose_a = tree.add(top.id, plan_index=0, depth=1, success=True)  # next: a's pose
+    placed_a = tree.add(choose_a.id, plan_index=0, depth=2, success=True, outputs={a_pose: 2.0})
+    reached_a = tree.add(placed_a.id, plan_index=0, depth=3, success=True)
+    choose_b = tree.add(reached_a.id, plan_index=0, depth=4, success=True)  # next: b's pose
+    assert a_pose in policy._given(choose_b)  # (at a opt-p) is a fact of b's pose's state
+    tree.add(choose_b.id, plan_index=0, depth=5, success=False)
+    choose_b.exhausted = choose_b.known_failure = True
+    for node in (top, choose_a, placed_a, reached_a, choose_b):
+        node.visits = 3
+    policy.pick_plan(tree)
+    if not given:
+        assert placed_a.id not in policy.dead
+        assert not policy.expand(tree, choose_a)
+        return
+    assert {choose_b.id, reached_a.id, placed_a.id} <= set(policy.dead)
+    assert choose_a.id not in policy.dead
+    assert policy.expand(tree, choose_a)  # sample another pose for a
+
+
 class SureOracle(ReachOracle):
     """Like :class:`ReachOracle`, but b's reach test is sure to pass (P_S 0.999)."""
 
